@@ -1,0 +1,201 @@
+//! Options shared by the subcommands: the scene, the image size, the camera, threads.
+
+use std::time::Instant;
+
+use clap::Args;
+use glam::DVec3;
+use obscura::cull::backface::BackfaceMode;
+use obscura::{Camera, Error, PrepareOptions, Projection, Result, Scene, Viewport};
+
+/// The scene and how to look at it.
+#[derive(Args, Debug, Clone)]
+pub struct ViewArgs {
+    /// A mesh file (.obj .gltf .glb .stl .ply), a scene file (.toml) or demo:NAME
+    /// (default, seed-task, cube, sphere, city). Without it, demo:default.
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<String>,
+    /// Image size in pixels, WIDTHxHEIGHT (each side at most 16384).
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u64, u64)>,
+    /// Eye position x,y,z (default: the scene's camera, or one framing its bounds).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub eye: Option<DVec3>,
+    /// Point looked at, x,y,z.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub target: Option<DVec3>,
+    /// Up direction, x,y,z.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub up: Option<DVec3>,
+    /// Vertical field of view in degrees (perspective).
+    #[arg(long, value_name = "DEG")]
+    pub fov: Option<f64>,
+    /// Near clipping distance (default: fitted to the scene).
+    #[arg(long, value_name = "N")]
+    pub near: Option<f64>,
+    /// Far clipping distance (default: fitted to the scene).
+    #[arg(long, value_name = "F")]
+    pub far: Option<f64>,
+    /// Orthographic projection showing this height of the world.
+    #[arg(long, value_name = "HEIGHT")]
+    pub ortho: Option<f64>,
+    /// Keep back faces (by default they are culled on closed objects).
+    #[arg(long)]
+    pub no_backface: bool,
+    /// Worker threads (default: all cores; 1 for single-thread figures).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+}
+
+/// The default image size.
+pub const DEFAULT_SIZE: (u64, u64) = (1280, 720);
+
+fn parse_size(s: &str) -> std::result::Result<(u64, u64), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("\"{s}\" is not WIDTHxHEIGHT, e.g. 1920x1080"))?;
+    let n = |v: &str| {
+        v.trim()
+            .parse::<u64>()
+            .map_err(|_| format!("\"{v}\" is not a whole number of pixels"))
+    };
+    Ok((n(w)?, n(h)?))
+}
+
+fn parse_vec3(s: &str) -> std::result::Result<DVec3, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("\"{s}\" is not x,y,z"));
+    }
+    let mut v = [0.0; 3];
+    for (k, p) in parts.iter().enumerate() {
+        v[k] = p
+            .trim()
+            .parse::<f64>()
+            .map_err(|_| format!("\"{p}\" is not a number"))?;
+        if !v[k].is_finite() {
+            return Err(format!("\"{p}\" is not a finite number"));
+        }
+    }
+    Ok(DVec3::from_array(v))
+}
+
+/// A loaded scene and how long loading took.
+pub struct Loaded {
+    /// The spec it was loaded from.
+    pub spec: String,
+    /// The scene.
+    pub scene: Scene,
+    /// Reading and building the scene, in milliseconds.
+    pub load_ms: f64,
+}
+
+impl ViewArgs {
+    /// Loads the scene, printing load warnings to stderr.
+    pub fn load(&self) -> Result<Loaded> {
+        let spec = self
+            .scene
+            .clone()
+            .unwrap_or_else(|| "demo:default".to_string());
+        let start = Instant::now();
+        let scene = Scene::load(&spec)?;
+        let load_ms = start.elapsed().as_secs_f64() * 1e3;
+        scene.ensure_not_empty(&spec)?;
+        for w in scene.report().warnings() {
+            eprintln!("warning: {spec}: {w}");
+        }
+        Ok(Loaded {
+            spec,
+            scene,
+            load_ms,
+        })
+    }
+
+    /// The checked viewport.
+    pub fn viewport(&self, scene: &Scene) -> Result<Viewport> {
+        let (w, h) = self.size.unwrap_or_else(|| default_size(scene));
+        Viewport::new(w, h)
+    }
+
+    /// The camera: the scene's (or one framing it), with the given overrides. When the
+    /// eye or target is overridden and near/far are not given, they are fitted to the
+    /// scene's bounds along the new view direction.
+    pub fn camera(&self, scene: &Scene, viewport: Viewport) -> Result<Camera> {
+        let base = scene.default_camera(viewport.aspect());
+        let moved = self.eye.is_some() || self.target.is_some() || self.up.is_some();
+        let mut cam = Camera {
+            eye: self.eye.unwrap_or(base.eye),
+            target: self.target.unwrap_or(base.target),
+            up: self.up.unwrap_or(if moved && scene.camera().is_none() {
+                scene.up()
+            } else {
+                base.up
+            }),
+            ..base
+        };
+        if let Some(fov) = self.fov {
+            cam.projection = Projection::Perspective { fov_y_degrees: fov };
+        }
+        if let Some(h) = self.ortho {
+            cam.projection = Projection::Orthographic { height: h };
+        }
+        if moved || self.ortho.is_some() {
+            let (near, far) = fit_depth_range(scene, &cam);
+            cam.near = near;
+            cam.far = far;
+        }
+        if let Some(n) = self.near {
+            cam.near = n;
+        }
+        if let Some(f) = self.far {
+            cam.far = f;
+        }
+        cam.validate()?;
+        Ok(cam)
+    }
+
+    /// Pipeline options from the flags.
+    pub fn prepare_options(&self) -> PrepareOptions {
+        let mode = if self.no_backface {
+            BackfaceMode::Off
+        } else {
+            BackfaceMode::Closed
+        };
+        PrepareOptions::default().with_backface(mode)
+    }
+
+    /// Runs `f` on a thread pool of the requested size.
+    pub fn with_threads<T: Send>(&self, f: impl FnOnce() -> T + Send) -> Result<T> {
+        let n = self.threads.unwrap_or(0);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map_err(|e| Error::option("--threads", e.to_string()))?;
+        Ok(pool.install(f))
+    }
+}
+
+/// Scenes that carry a camera made for a size (the seed's 32x32 task) get that size.
+fn default_size(scene: &Scene) -> (u64, u64) {
+    match scene.camera() {
+        Some(c) if *c == obscura::scene::demo::seed_task_camera() => (32, 32),
+        _ => DEFAULT_SIZE,
+    }
+}
+
+/// Near and far distances that hold the scene's box as seen along the camera's axis.
+fn fit_depth_range(scene: &Scene, cam: &Camera) -> (f64, f64) {
+    let (_, _, forward) = cam.basis();
+    let b = scene.bounds();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for c in b.corners() {
+        let d = (c - cam.eye).dot(forward);
+        lo = lo.min(d);
+        hi = hi.max(d);
+    }
+    let size = b.extent().length().max(1e-9);
+    let far = hi.max(size * 1e-3) * 1.01 + size * 1e-6;
+    match cam.projection {
+        Projection::Perspective { .. } => ((lo * 0.99).max(far * 1e-4), far),
+        Projection::Orthographic { .. } => (lo - size * 0.01, far),
+    }
+}

@@ -1,0 +1,174 @@
+//! `obscura render`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use obscura::geom::BoundsKind;
+use obscura::surface::{Algorithm, RenderOptions, render};
+use obscura::{Result, prepare};
+use serde_json::json;
+
+use crate::common::ViewArgs;
+
+pub const EXAMPLES: &str = "\
+Examples:
+  obscura render                                   # the default demo to obscura.png
+  obscura render demo:city --size 1920x1080 --stats
+  obscura render ../shared/data/sponza.obj --eye 0,-10,2 --target 0,10,4 --up 0,0,1 --fov 60 \\
+      --size 1920x1080 --threads 1 --stats-json sponza.json
+  obscura render model.obj --algo bsp --ids ids.npy --depth depth.npy
+  obscura render demo:seed-task -o task.png --view ids";
+
+/// What the PNG shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ImageView {
+    /// Flat-shaded colours.
+    Shaded,
+    /// A false colour per face id.
+    Ids,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Hidden-surface algorithm: zbuffer, scanline, depth-sort, depth-sort-matrix, bsp,
+    /// warnock, raycast, raycast-bounds, raycast-bvh, raycast-grid, octree.
+    #[arg(long, default_value = "zbuffer", value_parser = parse_algo)]
+    pub algo: Algorithm,
+    /// Bounding volume for raycast-bounds: sphere, aabb, obb, kdop.
+    #[arg(long, default_value = "aabb", value_parser = parse_bounds)]
+    pub bounds: BoundsKind,
+    /// The PNG to write.
+    #[arg(
+        short = 'o',
+        long = "output",
+        value_name = "OUT.png",
+        default_value = "obscura.png"
+    )]
+    pub output: PathBuf,
+    /// What the PNG shows.
+    #[arg(long = "view", value_enum, default_value = "shaded")]
+    pub image: ImageView,
+    /// Write face ids as an int32 NumPy array (height, width), -1 for background.
+    #[arg(long, value_name = "IDS.npy")]
+    pub ids: Option<PathBuf>,
+    /// Write eye-space depths as a float32 NumPy array (height, width), +inf for background.
+    #[arg(long, value_name = "DEPTH.npy")]
+    pub depth: Option<PathBuf>,
+    /// Print per-stage counts and times.
+    #[arg(long)]
+    pub stats: bool,
+    /// Write the statistics as JSON (load_ms, render_ms, stages, algorithm stats).
+    #[arg(long, value_name = "FILE")]
+    pub stats_json: Option<PathBuf>,
+}
+
+fn parse_algo(s: &str) -> std::result::Result<Algorithm, String> {
+    s.parse().map_err(|e: obscura::Error| e.to_string())
+}
+
+fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {
+    s.parse().map_err(|e: obscura::Error| e.to_string())
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let loaded = args.view.load()?;
+    let scene = &loaded.scene;
+    let viewport = args.view.viewport(scene)?;
+    let camera = args.view.camera(scene, viewport)?;
+    let options = RenderOptions::default().with_bounds(args.bounds);
+    let prep = args.view.prepare_options();
+    let threads = args.view.threads.unwrap_or(0);
+
+    let (stages, frame, stats, render_ms, prepare_ms) = args.view.with_threads(|| {
+        let start = Instant::now();
+        let view = prepare(scene, &camera, viewport, &prep)?;
+        let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
+        let (frame, stats) = render(args.algo, &view, &options)?;
+        let render_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok::<_, obscura::Error>((view.stats().clone(), frame, stats, render_ms, prepare_ms))
+    })??;
+
+    let image = match args.image {
+        ImageView::Shaded => frame.shade(scene, &camera),
+        ImageView::Ids => frame.id_false_colour(),
+    };
+    image.write_png(&args.output)?;
+    if let Some(p) = &args.ids {
+        frame.write_ids_npy(p)?;
+    }
+    if let Some(p) = &args.depth {
+        frame.write_depth_npy(p)?;
+    }
+
+    if args.stats {
+        println!(
+            "scene {} : {} objects, {} faces, {} triangles; loaded in {:.1} ms",
+            loaded.spec,
+            scene.objects().len(),
+            scene.face_count(),
+            scene.triangle_count(),
+            loaded.load_ms
+        );
+        println!(
+            "{:<48} {:>9} {:>12} {:>12} {:>9}",
+            "stage", "unit", "in", "out", "ms"
+        );
+        for s in &stages.stages {
+            println!(
+                "{:<48} {:>9} {:>12} {:>12} {:>9.2}",
+                s.stage, s.unit, s.input, s.output, s.ms
+            );
+        }
+        let algo_ms = stats.get("time_ms").unwrap_or(0.0);
+        println!(
+            "{:<48} {:>9} {:>12} {:>12} {:>9.2}",
+            format!("visibility: {}", args.algo),
+            "pixels",
+            viewport.pixel_count(),
+            frame.covered_pixels(),
+            algo_ms
+        );
+        for (k, v) in &stats.entries {
+            if k != "time_ms" {
+                println!("  {k:<46} {v:>12}");
+            }
+        }
+        println!(
+            "render_ms {render_ms:.2} (prepare {prepare_ms:.2}, {} {algo_ms:.2})",
+            args.algo
+        );
+    }
+    if let Some(p) = &args.stats_json {
+        let doc = json!({
+            "scene": loaded.spec,
+            "algorithm": args.algo.name(),
+            "width": viewport.width,
+            "height": viewport.height,
+            "threads": if threads == 0 { rayon::current_num_threads() } else { threads },
+            "objects": scene.objects().len(),
+            "faces": scene.face_count(),
+            "triangles": scene.triangle_count(),
+            "load_ms": loaded.load_ms,
+            "render_ms": render_ms,
+            "prepare_ms": prepare_ms,
+            "algorithm_ms": stats.get("time_ms"),
+            "covered_pixels": frame.covered_pixels(),
+            "stages": stages.stages,
+            "stats": stats,
+        });
+        let text = serde_json::to_string_pretty(&doc).expect("JSON of plain values");
+        std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
+    }
+    println!(
+        "wrote {} ({}x{}, {}, {:.1} ms)",
+        args.output.display(),
+        viewport.width,
+        viewport.height,
+        args.algo,
+        render_ms
+    );
+    Ok(())
+}

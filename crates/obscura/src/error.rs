@@ -1,0 +1,132 @@
+//! The one error type of the library.
+//!
+//! Every error names what it is about: the file and line for text formats, the file
+//! and the element (mesh, facet, vertex) for binary ones, the object for scene-level
+//! problems. Nothing in the library panics on bad input.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in obscura.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// A text file has a malformed line (or a value on it is unusable).
+    #[error("{}:{line}: {message}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong with the line.
+        message: String,
+    },
+    /// A binary or structured file is malformed; `element` names the part (mesh,
+    /// facet, vertex, accessor) where that is known.
+    #[error("{}: {element}: {message}", path.display())]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// The element of the file that is wrong, e.g. `facet 12` or `mesh "Cube"`.
+        element: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The file extension is not one obscura can read.
+    #[error("{}: unsupported file type (expected .obj, .gltf, .glb, .stl, .ply or .toml)", path.display())]
+    UnsupportedFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// An object of the scene is unusable (non-finite coordinates, bad transform...).
+    #[error("object \"{object}\": {message}")]
+    InvalidObject {
+        /// The object's name.
+        object: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The scene has nothing to render.
+    #[error("the scene is empty: {0}")]
+    EmptyScene(String),
+    /// A `demo:NAME` that does not exist.
+    #[error("unknown demo scene \"{name}\" (known: {known})")]
+    UnknownDemo {
+        /// The name asked for.
+        name: String,
+        /// The names that exist, comma separated.
+        known: String,
+    },
+    /// The camera cannot produce an image (eye on the target, up parallel to the view
+    /// direction, near >= far, a field of view outside (0, 180) degrees...).
+    #[error("invalid camera: {0}")]
+    InvalidCamera(String),
+    /// The image size is zero, too large, or would not fit in memory.
+    #[error("invalid image size {width}x{height}: {reason}")]
+    InvalidViewport {
+        /// Requested width in pixels.
+        width: u64,
+        /// Requested height in pixels.
+        height: u64,
+        /// Why it is refused.
+        reason: String,
+    },
+    /// An option value that makes no sense (named, with the reason).
+    #[error("invalid option {option}: {reason}")]
+    InvalidOption {
+        /// The option.
+        option: String,
+        /// Why it is refused.
+        reason: String,
+    },
+}
+
+impl Error {
+    /// Shorthand for an [`Error::Io`].
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+
+    /// Shorthand for an [`Error::Parse`].
+    pub fn parse(path: impl Into<PathBuf>, line: usize, message: impl Into<String>) -> Self {
+        Error::Parse {
+            path: path.into(),
+            line,
+            message: message.into(),
+        }
+    }
+
+    /// Shorthand for an [`Error::Format`].
+    pub fn format(
+        path: impl Into<PathBuf>,
+        element: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        Error::Format {
+            path: path.into(),
+            element: element.into(),
+            message: message.into(),
+        }
+    }
+
+    /// Shorthand for an [`Error::InvalidOption`].
+    pub fn option(option: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::InvalidOption {
+            option: option.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// `Result` with obscura's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,282 @@
+//! Planes `n·p + d = 0`, from Newell's method or from three points by Cramer's rule.
+//!
+//! Source: seed 004 ("Визначення рівняння площини ... методом Н'юела"), which writes
+//! the plane of the z-buffer task's triangle as `3x + y + 4z - 120 = 0` by solving
+//! `(a/d, b/d, c/d) · M = (-1, -1, -1)` with Cramer's rule.
+
+use glam::DVec3;
+
+/// A plane `normal · p + d = 0`. The normal is not necessarily of unit length; the
+/// positive side (`normal · p + d > 0`) is the side the normal points to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    /// The normal `(a, b, c)`.
+    pub normal: DVec3,
+    /// The constant `d`.
+    pub d: f64,
+}
+
+/// Where a point or polygon lies relative to a plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlaneSide {
+    /// Strictly on the side the normal points to.
+    Front,
+    /// Strictly on the other side.
+    Back,
+    /// On the plane (within the tolerance used).
+    On,
+    /// Polygons only: vertices on both sides.
+    Spanning,
+}
+
+impl Plane {
+    /// The plane with this normal through this point.
+    #[must_use]
+    pub fn from_point_normal(point: DVec3, normal: DVec3) -> Self {
+        Plane {
+            normal,
+            d: -normal.dot(point),
+        }
+    }
+
+    /// The plane of a polygon by Newell's method: the normal is the sum over edges of
+    /// `(y_i - y_j)(z_i + z_j), (z_i - z_j)(x_i + x_j), (x_i - x_j)(y_i + y_j)`
+    /// (twice the projected areas), and `d` uses the centroid, so the result is the
+    /// best fit for non-planar or nearly degenerate n-gons. The normal is unit length
+    /// and points to the side from which the vertices are seen counter-clockwise.
+    ///
+    /// Returns `None` for fewer than three points or a polygon of (numerically) zero area.
+    ///
+    /// ```
+    /// use obscura::geom::Plane;
+    /// use glam::DVec3;
+    /// let quad = [DVec3::new(0., 0., 1.), DVec3::new(1., 0., 1.), DVec3::new(1., 1., 1.), DVec3::new(0., 1., 1.)];
+    /// let p = Plane::newell(&quad).unwrap();
+    /// assert_eq!(p.normal, DVec3::Z);
+    /// assert_eq!(p.d, -1.0);
+    /// ```
+    #[must_use]
+    pub fn newell(points: &[DVec3]) -> Option<Self> {
+        if points.len() < 3 {
+            return None;
+        }
+        let n = super::newell_normal(points);
+        let len = n.length();
+        let scale = points
+            .iter()
+            .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+        // Twice the area is |n|; refuse areas below 1e-24 of the coordinate scale squared.
+        if !(len > 1e-24 * scale * scale) || !len.is_finite() {
+            return None;
+        }
+        let normal = n / len;
+        let centroid = points.iter().copied().sum::<DVec3>() / points.len() as f64;
+        Some(Plane::from_point_normal(centroid, normal))
+    }
+
+    /// The plane through three points written as `a_n x + b_n y + c_n z = -1` and solved
+    /// by Cramer's rule, as seed 004 does; the result is scaled back to `n·p + d = 0`
+    /// with `d = 1` divided out, i.e. `normal = (a_n, b_n, c_n)`, `d = 1`.
+    ///
+    /// This form cannot represent a plane through the origin (the system is singular);
+    /// it then returns `None`. Use [`Plane::from_three_points`] in general.
+    ///
+    /// ```
+    /// use obscura::geom::Plane;
+    /// use glam::DVec3;
+    /// // seed 004: T1(15,15,15) T2(25,25,5) T3(30,10,5) lie on 3x + y + 4z - 120 = 0
+    /// let p = Plane::from_three_points_cramer(
+    ///     DVec3::new(15., 15., 15.), DVec3::new(25., 25., 5.), DVec3::new(30., 10., 5.)).unwrap();
+    /// let k = -120.0; // scale so that d = -120
+    /// assert!((p.normal * k - DVec3::new(-3., -1., -4.) * -1.0).length() < 1e-9);
+    /// ```
+    #[must_use]
+    pub fn from_three_points_cramer(p1: DVec3, p2: DVec3, p3: DVec3) -> Option<Self> {
+        // Rows of M are the points; solve M · (a_n, b_n, c_n)^T = (-1, -1, -1)^T.
+        let det = |a: DVec3, b: DVec3, c: DVec3| a.dot(b.cross(c));
+        let m = det(p1, p2, p3);
+        let scale = p1
+            .abs()
+            .max_element()
+            .max(p2.abs().max_element())
+            .max(p3.abs().max_element());
+        if !(m.abs() > 1e-12 * scale * scale * scale) {
+            return None;
+        }
+        // Column j of M replaced by the right-hand side (-1, -1, -1).
+        let col = |v: DVec3, j: usize, r: f64| {
+            let mut a = v.to_array();
+            a[j] = r;
+            DVec3::from_array(a)
+        };
+        let mj = |j: usize| det(col(p1, j, -1.0), col(p2, j, -1.0), col(p3, j, -1.0));
+        let normal = DVec3::new(mj(0), mj(1), mj(2)) / m;
+        Some(Plane { normal, d: 1.0 })
+    }
+
+    /// The plane through three points, by the cross product; counter-clockwise seen
+    /// from the positive side. `None` when the points are collinear.
+    #[must_use]
+    pub fn from_three_points(p1: DVec3, p2: DVec3, p3: DVec3) -> Option<Self> {
+        Plane::newell(&[p1, p2, p3])
+    }
+
+    /// `normal · p + d`: positive in front, scaled by `|normal|`.
+    #[inline]
+    #[must_use]
+    pub fn evaluate(&self, p: DVec3) -> f64 {
+        self.normal.dot(p) + self.d
+    }
+
+    /// The signed Euclidean distance of `p` (the normal need not be unit length).
+    #[must_use]
+    pub fn signed_distance(&self, p: DVec3) -> f64 {
+        self.evaluate(p) / self.normal.length()
+    }
+
+    /// The same plane with a unit normal.
+    #[must_use]
+    pub fn normalized(&self) -> Self {
+        let l = self.normal.length();
+        Plane {
+            normal: self.normal / l,
+            d: self.d / l,
+        }
+    }
+
+    /// The same plane facing the other way.
+    #[must_use]
+    pub fn flipped(&self) -> Self {
+        Plane {
+            normal: -self.normal,
+            d: -self.d,
+        }
+    }
+
+    /// Which side `p` is on, with `|signed distance| <= eps` counted as on the plane.
+    #[must_use]
+    pub fn side_of(&self, p: DVec3, eps: f64) -> PlaneSide {
+        let s = self.signed_distance(p);
+        if s > eps {
+            PlaneSide::Front
+        } else if s < -eps {
+            PlaneSide::Back
+        } else {
+            PlaneSide::On
+        }
+    }
+
+    /// Which side a polygon is on: `Spanning` if it has vertices strictly on both
+    /// sides, `On` if every vertex is within `eps`.
+    #[must_use]
+    pub fn classify_polygon(&self, points: &[DVec3], eps: f64) -> PlaneSide {
+        let (mut front, mut back) = (false, false);
+        for &p in points {
+            match self.side_of(p, eps) {
+                PlaneSide::Front => front = true,
+                PlaneSide::Back => back = true,
+                _ => {}
+            }
+        }
+        match (front, back) {
+            (true, true) => PlaneSide::Spanning,
+            (true, false) => PlaneSide::Front,
+            (false, true) => PlaneSide::Back,
+            (false, false) => PlaneSide::On,
+        }
+    }
+
+    /// Where the segment `a`-`b` meets the plane, as the parameter `t` of `a + t(b-a)`;
+    /// `None` if the segment is parallel to the plane.
+    #[must_use]
+    pub fn intersect_segment(&self, a: DVec3, b: DVec3) -> Option<f64> {
+        let da = self.evaluate(a);
+        let db = self.evaluate(b);
+        let denom = da - db;
+        if denom == 0.0 { None } else { Some(da / denom) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cramer_reproduces_seed_004_task() {
+        // a_n = -3/120, b_n = -1/120, c_n = -4/120
+        let p = Plane::from_three_points_cramer(
+            DVec3::new(15., 15., 15.),
+            DVec3::new(25., 25., 5.),
+            DVec3::new(30., 10., 5.),
+        )
+        .unwrap();
+        assert!((p.normal.x - (-3.0 / 120.0)).abs() < 1e-15);
+        assert!((p.normal.y - (-1.0 / 120.0)).abs() < 1e-15);
+        assert!((p.normal.z - (-4.0 / 120.0)).abs() < 1e-15);
+        // Scaling by -120 gives 3x + y + 4z - 120 = 0.
+        let s = -120.0;
+        assert!((p.normal * s - DVec3::new(3., 1., 4.)).length() < 1e-12);
+        assert!((p.d * s + 120.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn cramer_refuses_plane_through_origin() {
+        assert!(Plane::from_three_points_cramer(DVec3::ZERO, DVec3::X, DVec3::Y).is_none());
+    }
+
+    #[test]
+    fn newell_agrees_with_cramer_on_the_seed_triangle() {
+        let pts = [
+            DVec3::new(15., 15., 15.),
+            DVec3::new(25., 25., 5.),
+            DVec3::new(30., 10., 5.),
+        ];
+        let n = Plane::newell(&pts).unwrap();
+        let c = Plane::from_three_points_cramer(pts[0], pts[1], pts[2])
+            .unwrap()
+            .normalized();
+        // Same plane up to orientation.
+        let sign = n.normal.dot(c.normal).signum();
+        assert!((n.normal - c.normal * sign).length() < 1e-12);
+        assert!((n.d - c.d * sign).abs() < 1e-9);
+        // 3x + y + 4z - 120 = 0 up to scale
+        let expected = DVec3::new(3., 1., 4.).normalize();
+        assert!((n.normal.dot(expected).abs() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn newell_is_robust_for_nonplanar_quads() {
+        // A slightly twisted quad: Newell gives the average plane, all vertices close to it.
+        let q = [
+            DVec3::new(0., 0., 0.),
+            DVec3::new(1., 0., 0.01),
+            DVec3::new(1., 1., 0.),
+            DVec3::new(0., 1., 0.01),
+        ];
+        let p = Plane::newell(&q).unwrap();
+        assert!(p.normal.z > 0.9999);
+        for v in q {
+            assert!(p.signed_distance(v).abs() <= 0.0050001);
+        }
+    }
+
+    #[test]
+    fn newell_refuses_degenerate() {
+        assert!(Plane::newell(&[DVec3::ZERO, DVec3::X, DVec3::X * 2.0]).is_none());
+        assert!(Plane::newell(&[DVec3::ZERO, DVec3::X]).is_none());
+        assert!(Plane::newell(&[DVec3::ZERO, DVec3::X, DVec3::new(f64::NAN, 0., 0.)]).is_none());
+    }
+
+    #[test]
+    fn classify_and_intersect() {
+        let p = Plane::from_point_normal(DVec3::ZERO, DVec3::Z);
+        let tri = [
+            DVec3::new(0., 0., -1.),
+            DVec3::new(1., 0., 1.),
+            DVec3::new(0., 1., 1.),
+        ];
+        assert_eq!(p.classify_polygon(&tri, 1e-9), PlaneSide::Spanning);
+        assert_eq!(p.intersect_segment(tri[0], tri[1]), Some(0.5));
+        assert_eq!(p.side_of(DVec3::new(0., 0., 1e-12), 1e-9), PlaneSide::On);
+    }
+}

@@ -1,0 +1,47 @@
+//! # obscura: what can be seen?
+//!
+//! Given a 3D scene and a view, obscura clips, culls and removes hidden surfaces with
+//! every classical algorithm of the field behind one interface, each checked against
+//! the others.
+//!
+//! ```text
+//! Scene ─► view::prepare ─► PreparedView ─► surface::render(Algorithm) ─► Frame (ids + depth)
+//! ```
+//!
+//! ```
+//! use obscura::{Scene, Viewport, prepare, PrepareOptions};
+//! use obscura::surface::{render, Algorithm, RenderOptions};
+//!
+//! let scene = Scene::load("demo:default")?;
+//! let viewport = Viewport::new(320, 240)?;
+//! let camera = scene.default_camera(viewport.aspect());
+//! let view = prepare(&scene, &camera, viewport, &PrepareOptions::default())?;
+//! let (frame, stats) = render(Algorithm::ZBuffer, &view, &RenderOptions::default())?;
+//! println!("{} pixels show a face; {:?}", frame.covered_pixels(), stats.get("pixels_tested"));
+//! # Ok::<(), obscura::Error>(())
+//! ```
+//!
+//! Conventions (coordinates, pixel sampling, ids, depth) are in `docs/ARCHITECTURE.md`
+//! and in the docs of [`view`], [`raster`] and [`frame`].
+
+#![warn(missing_docs)]
+// `!(x > limit)` is how this crate rejects NaN along with small values; rewriting it
+// with partial_cmp would hide that intent.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod accel;
+pub mod clip;
+pub mod cull;
+mod error;
+pub mod frame;
+pub mod geom;
+pub mod raster;
+pub mod scene;
+pub mod surface;
+pub mod view;
+
+pub use error::{Error, Result};
+pub use frame::{BACKGROUND, Frame, RgbImage};
+pub use scene::{Camera, Projection, Scene, Viewport};
+pub use surface::{Algorithm, RenderOptions, Stats, render};
+pub use view::{PrepareOptions, PreparedView, prepare};

@@ -1,0 +1,408 @@
+//! Cameras (look-at, perspective or orthographic) and viewports.
+//!
+//! Conventions (see `docs/ARCHITECTURE.md`): right-handed world; the camera looks down
+//! `-z` in eye space; OpenGL clip space `-w <= x, y, z <= w`; `gluLookAt` and
+//! `gluPerspective` semantics (vertical field of view in degrees).
+
+use glam::{DMat4, DVec3, DVec4};
+
+use crate::geom::Aabb;
+use crate::{Error, Result};
+
+/// How the eye space is projected.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Perspective with this vertical field of view in degrees, in (0, 180).
+    Perspective {
+        /// Vertical field of view, degrees.
+        fov_y_degrees: f64,
+    },
+    /// Parallel projection showing this height of the world (the width follows the
+    /// viewport's aspect ratio).
+    Orthographic {
+        /// Visible height in world units.
+        height: f64,
+    },
+}
+
+/// A look-at camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Where the eye is.
+    pub eye: DVec3,
+    /// The point looked at.
+    pub target: DVec3,
+    /// The up direction (need not be orthogonal to the view direction).
+    pub up: DVec3,
+    /// Perspective or orthographic.
+    pub projection: Projection,
+    /// Distance of the near clipping plane along the view axis (> 0 for perspective).
+    pub near: f64,
+    /// Distance of the far clipping plane (> near).
+    pub far: f64,
+}
+
+/// A ray from a camera through a point of the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Where the ray starts (the eye, or for orthographic cameras a point of the eye plane).
+    pub origin: DVec3,
+    /// The direction; for perspective rays scaled so that `t` is the eye-space depth
+    /// (`direction · forward = 1`), for orthographic rays the unit forward vector.
+    pub direction: DVec3,
+}
+
+impl Camera {
+    /// A perspective camera.
+    #[must_use]
+    pub fn perspective(
+        eye: DVec3,
+        target: DVec3,
+        up: DVec3,
+        fov_y_degrees: f64,
+        near: f64,
+        far: f64,
+    ) -> Self {
+        Camera {
+            eye,
+            target,
+            up,
+            projection: Projection::Perspective { fov_y_degrees },
+            near,
+            far,
+        }
+    }
+
+    /// An orthographic camera.
+    #[must_use]
+    pub fn orthographic(
+        eye: DVec3,
+        target: DVec3,
+        up: DVec3,
+        height: f64,
+        near: f64,
+        far: f64,
+    ) -> Self {
+        Camera {
+            eye,
+            target,
+            up,
+            projection: Projection::Orthographic { height },
+            near,
+            far,
+        }
+    }
+
+    /// Checks that the camera can produce an image.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::InvalidCamera(m));
+        if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
+            return bad(format!(
+                "eye {:?}, target {:?} and up {:?} must be finite",
+                self.eye.to_array(),
+                self.target.to_array(),
+                self.up.to_array()
+            ));
+        }
+        let dir = self.target - self.eye;
+        if dir.length() <= 1e-12 * self.eye.abs().max_element().max(1.0) {
+            return bad("the eye is on the target: no view direction".into());
+        }
+        if dir.normalize().cross(self.up).length() < 1e-9 || self.up.length() == 0.0 {
+            return bad("the up vector is zero or parallel to the view direction".into());
+        }
+        if !(self.near.is_finite() && self.far.is_finite() && self.far > self.near) {
+            return bad(format!(
+                "need near < far, both finite (near {}, far {})",
+                self.near, self.far
+            ));
+        }
+        match self.projection {
+            Projection::Perspective { fov_y_degrees } => {
+                if !(fov_y_degrees > 0.0 && fov_y_degrees < 180.0) {
+                    return bad(format!(
+                        "field of view {fov_y_degrees} degrees is not in (0, 180)"
+                    ));
+                }
+                if !(self.near > 0.0) {
+                    return bad(format!(
+                        "a perspective camera needs near > 0 (near {})",
+                        self.near
+                    ));
+                }
+            }
+            Projection::Orthographic { height } => {
+                if !(height > 0.0 && height.is_finite()) {
+                    return bad(format!("orthographic height {height} must be positive"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The camera's orthonormal basis `(right, up, forward)` in world space.
+    #[must_use]
+    pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
+        let f = (self.target - self.eye).normalize();
+        let r = f.cross(self.up).normalize();
+        let u = r.cross(f);
+        (r, u, f)
+    }
+
+    /// World to eye space (`gluLookAt`).
+    #[must_use]
+    pub fn view_matrix(&self) -> DMat4 {
+        let (r, u, f) = self.basis();
+        DMat4::from_cols(
+            DVec4::new(r.x, u.x, -f.x, 0.0),
+            DVec4::new(r.y, u.y, -f.y, 0.0),
+            DVec4::new(r.z, u.z, -f.z, 0.0),
+            DVec4::new(-r.dot(self.eye), -u.dot(self.eye), f.dot(self.eye), 1.0),
+        )
+    }
+
+    /// The half extents of the view window at unit depth (perspective) or in world
+    /// units (orthographic): `(half_width, half_height)`.
+    #[must_use]
+    pub fn half_extents(&self, aspect: f64) -> (f64, f64) {
+        match self.projection {
+            Projection::Perspective { fov_y_degrees } => {
+                let h = (fov_y_degrees.to_radians() * 0.5).tan();
+                (h * aspect, h)
+            }
+            Projection::Orthographic { height } => (height * 0.5 * aspect, height * 0.5),
+        }
+    }
+
+    /// Eye to clip space (`gluPerspective` or `glOrtho`), for `aspect = width / height`.
+    #[must_use]
+    pub fn projection_matrix(&self, aspect: f64) -> DMat4 {
+        let (n, f) = (self.near, self.far);
+        let (hw, hh) = self.half_extents(aspect);
+        match self.projection {
+            Projection::Perspective { .. } => DMat4::from_cols(
+                DVec4::new(1.0 / hw, 0.0, 0.0, 0.0),
+                DVec4::new(0.0, 1.0 / hh, 0.0, 0.0),
+                DVec4::new(0.0, 0.0, (f + n) / (n - f), -1.0),
+                DVec4::new(0.0, 0.0, 2.0 * f * n / (n - f), 0.0),
+            ),
+            Projection::Orthographic { .. } => DMat4::from_cols(
+                DVec4::new(1.0 / hw, 0.0, 0.0, 0.0),
+                DVec4::new(0.0, 1.0 / hh, 0.0, 0.0),
+                DVec4::new(0.0, 0.0, -2.0 / (f - n), 0.0),
+                DVec4::new(0.0, 0.0, -(f + n) / (f - n), 1.0),
+            ),
+        }
+    }
+
+    /// The world-space ray through the image point `(px, py)` (pixel units, row 0 at
+    /// the top; the centre of pixel `(i, j)` is `(i + 0.5, j + 0.5)`).
+    #[must_use]
+    pub fn ray(&self, viewport: Viewport, px: f64, py: f64) -> Ray {
+        let (r, u, f) = self.basis();
+        let (hw, hh) = self.half_extents(viewport.aspect());
+        let sx = (2.0 * px / f64::from(viewport.width) - 1.0) * hw;
+        let sy = (1.0 - 2.0 * py / f64::from(viewport.height)) * hh;
+        match self.projection {
+            Projection::Perspective { .. } => Ray {
+                origin: self.eye,
+                direction: f + r * sx + u * sy,
+            },
+            Projection::Orthographic { .. } => Ray {
+                origin: self.eye + r * sx + u * sy,
+                direction: f,
+            },
+        }
+    }
+
+    /// A camera that shows the whole box: looking at its centre from the direction
+    /// `(1, 0.6, 1.4)` rotated into the given up axis convention, far enough for its
+    /// bounding sphere to fit the narrower field of view, with near and far planes
+    /// hugging the sphere.
+    #[must_use]
+    pub fn framing(bounds: &Aabb, aspect: f64, up: DVec3, fov_y_degrees: f64) -> Self {
+        let center = if bounds.is_empty() {
+            DVec3::ZERO
+        } else {
+            bounds.center()
+        };
+        let radius = if bounds.is_empty() {
+            1.0
+        } else {
+            (bounds.extent().length() * 0.5).max(1e-9)
+        };
+        // Build a pleasant diagonal in the frame where `up` is the vertical.
+        let up = up.normalize();
+        let side = if up.abs().dot(DVec3::X) > 0.9 {
+            DVec3::Y
+        } else {
+            DVec3::X
+        };
+        let a = side.reject_from(up).normalize();
+        let b = up.cross(a);
+        let dir = (a * 1.0 + b * 1.4 + up * 0.75).normalize();
+        let half_fov =
+            (fov_y_degrees.to_radians() * 0.5).min((fov_y_degrees.to_radians() * 0.5).tan().atan());
+        let half_fov_x = ((half_fov.tan()) * aspect).atan();
+        let fit = half_fov.min(half_fov_x).sin();
+        let distance = radius / fit * 1.05;
+        let eye = center + dir * distance;
+        let near = (distance - radius * 1.01).max(distance * 1e-3);
+        let far = distance + radius * 1.01;
+        Camera::perspective(eye, center, up, fov_y_degrees, near, far)
+    }
+}
+
+/// The image size in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Viewport {
+    /// Width in pixels, 1..=[`Viewport::MAX_SIDE`].
+    pub width: u32,
+    /// Height in pixels, 1..=[`Viewport::MAX_SIDE`].
+    pub height: u32,
+}
+
+impl Viewport {
+    /// The largest accepted side.
+    pub const MAX_SIDE: u64 = 16384;
+
+    /// A checked viewport: each side in `1..=16384`.
+    pub fn new(width: u64, height: u64) -> Result<Self> {
+        let err = |reason: String| {
+            Err(Error::InvalidViewport {
+                width,
+                height,
+                reason,
+            })
+        };
+        if width == 0 || height == 0 {
+            return err("both sides must be at least 1 pixel".into());
+        }
+        if width > Self::MAX_SIDE || height > Self::MAX_SIDE {
+            return err(format!(
+                "each side must be at most {} pixels",
+                Self::MAX_SIDE
+            ));
+        }
+        Ok(Viewport {
+            width: width as u32,
+            height: height as u32,
+        })
+    }
+
+    /// Number of pixels.
+    #[must_use]
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// `width / height`.
+    #[must_use]
+    pub fn aspect(&self) -> f64 {
+        f64::from(self.width) / f64::from(self.height)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam() -> Camera {
+        Camera::perspective(
+            DVec3::new(0., 0., 5.),
+            DVec3::ZERO,
+            DVec3::Y,
+            90.0,
+            1.0,
+            10.0,
+        )
+    }
+
+    #[test]
+    fn look_at_maps_target_to_negative_z() {
+        let v = cam().view_matrix();
+        let t = v.transform_point3(DVec3::ZERO);
+        assert!((t - DVec3::new(0., 0., -5.)).length() < 1e-12);
+        let c = Camera::perspective(
+            DVec3::new(3., 2., 1.),
+            DVec3::new(-1., 0., 4.),
+            DVec3::Y,
+            60.,
+            0.1,
+            100.,
+        );
+        let t = c.view_matrix().transform_point3(c.target);
+        assert!(t.x.abs() < 1e-12 && t.y.abs() < 1e-12 && t.z < 0.0);
+    }
+
+    #[test]
+    fn projection_maps_near_and_far_to_clip_bounds() {
+        let p = cam().projection_matrix(1.0);
+        let near = p * DVec4::new(0., 0., -1., 1.);
+        let far = p * DVec4::new(0., 0., -10., 1.);
+        assert!((near.z / near.w + 1.0).abs() < 1e-12);
+        assert!((far.z / far.w - 1.0).abs() < 1e-12);
+        // 90 degree fov: the point (1, 1, -1) is on the top-right corner
+        let c = p * DVec4::new(1., 1., -1., 1.);
+        assert!((c.x / c.w - 1.0).abs() < 1e-12 && (c.y / c.w - 1.0).abs() < 1e-12);
+        let o = Camera::orthographic(DVec3::Z * 5.0, DVec3::ZERO, DVec3::Y, 4.0, 1.0, 9.0)
+            .projection_matrix(2.0);
+        let c = o * DVec4::new(4., 2., -9., 1.);
+        assert!(
+            (c.x - 1.0).abs() < 1e-12 && (c.y - 1.0).abs() < 1e-12 && (c.z - 1.0).abs() < 1e-12
+        );
+    }
+
+    #[test]
+    fn rays_go_through_pixel_centres() {
+        let c = cam();
+        let vp = Viewport::new(2, 2).unwrap();
+        let r = c.ray(vp, 1.0, 1.0);
+        assert!((r.direction - DVec3::new(0., 0., -1.)).length() < 1e-12);
+        let r = c.ray(vp, 2.0, 0.0); // top-right corner
+        assert!((r.direction - DVec3::new(1., 1., -1.)).length() < 1e-12);
+    }
+
+    #[test]
+    fn validation() {
+        assert!(cam().validate().is_ok());
+        let mut c = cam();
+        c.target = c.eye;
+        assert!(c.validate().is_err());
+        let mut c = cam();
+        c.up = DVec3::Z;
+        assert!(c.validate().is_err());
+        let mut c = cam();
+        c.near = 0.0;
+        assert!(c.validate().is_err());
+        let mut c = cam();
+        c.projection = Projection::Perspective {
+            fov_y_degrees: 180.0,
+        };
+        assert!(c.validate().is_err());
+        let mut c = cam();
+        c.eye.x = f64::NAN;
+        assert!(c.validate().is_err());
+        assert!(Viewport::new(0, 10).is_err());
+        assert!(Viewport::new(16385, 10).is_err());
+        assert!(Viewport::new(16384, 16384).is_ok());
+    }
+
+    #[test]
+    fn framing_sees_the_whole_box() {
+        let b = Aabb {
+            min: DVec3::new(-1., -2., -3.),
+            max: DVec3::new(4., 5., 6.),
+        };
+        let c = Camera::framing(&b, 16.0 / 9.0, DVec3::Y, 45.0);
+        c.validate().unwrap();
+        let m = c.projection_matrix(16.0 / 9.0) * c.view_matrix();
+        for p in b.corners() {
+            let q = m * p.extend(1.0);
+            assert!(q.w > 0.0);
+            for k in 0..3 {
+                assert!(q[k].abs() <= q.w * 1.0001, "corner {p:?} outside: {q:?}");
+            }
+        }
+    }
+}

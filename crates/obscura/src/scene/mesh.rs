@@ -1,0 +1,514 @@
+//! Meshes of planar convex polygons, and the builder that makes them from raw faces.
+//!
+//! Every loader and generator goes through [`MeshBuilder`], so the rules for bad
+//! faces live in one place:
+//! - an index out of range is an error (the loader adds the file and line);
+//! - a face with fewer than three distinct vertices, or of zero area, is *degenerate*:
+//!   it is dropped and counted (`LoadReport::degenerate_faces`), but still consumes its
+//!   face id, so ids keep matching the file's face order;
+//! - a non-planar n-gon is triangulated and counted (`LoadReport::nonplanar_faces`);
+//! - a planar but concave n-gon is triangulated silently (the pipeline wants convex
+//!   polygons), counted in `LoadReport::concave_faces`.
+//!
+//! Triangles produced from one face keep that face's id.
+
+use std::ops::Range;
+
+use glam::DVec3;
+
+use crate::geom::{self, Plane};
+
+/// A material: a name and a diffuse colour (linear RGB in 0..=1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// The material's name in its file.
+    pub name: String,
+    /// Diffuse colour.
+    pub color: [f32; 3],
+}
+
+/// What a loader or generator had to fix or drop, to be reported to the user.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadReport {
+    /// Faces dropped for having zero area or fewer than three distinct vertices.
+    pub degenerate_faces: usize,
+    /// Non-planar n-gons that were triangulated.
+    pub nonplanar_faces: usize,
+    /// Planar concave n-gons that were triangulated.
+    pub concave_faces: usize,
+    /// Other warnings, each naming its file or object.
+    pub messages: Vec<String>,
+}
+
+impl LoadReport {
+    /// Adds another report's counts and messages to this one.
+    pub fn merge(&mut self, other: &LoadReport) {
+        self.degenerate_faces += other.degenerate_faces;
+        self.nonplanar_faces += other.nonplanar_faces;
+        self.concave_faces += other.concave_faces;
+        self.messages.extend(other.messages.iter().cloned());
+    }
+
+    /// One line per kind of warning, for the user; empty when there is nothing to say.
+    #[must_use]
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.degenerate_faces > 0 {
+            w.push(format!(
+                "{} degenerate face(s) (zero area or < 3 distinct vertices) dropped",
+                self.degenerate_faces
+            ));
+        }
+        if self.nonplanar_faces > 0 {
+            w.push(format!(
+                "{} non-planar face(s) triangulated",
+                self.nonplanar_faces
+            ));
+        }
+        w.extend(self.messages.iter().cloned());
+        w
+    }
+}
+
+/// A mesh: vertex positions and planar convex polygons, each carrying the local id of
+/// the face it came from (several polygons share an id when a face was triangulated).
+///
+/// Polygons are stored flat (`polygon_starts` / `polygon_indices`, like a CSR matrix)
+/// so that million-face meshes cost a few allocations, not millions.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    positions: Vec<DVec3>,
+    polygon_starts: Vec<u32>,
+    polygon_indices: Vec<u32>,
+    polygon_face: Vec<u32>,
+    face_count: u32,
+    face_material: Vec<u32>,
+    materials: Vec<Material>,
+}
+
+impl Mesh {
+    /// Vertex positions (object space).
+    #[must_use]
+    pub fn positions(&self) -> &[DVec3] {
+        &self.positions
+    }
+
+    /// Number of polygons (after triangulation of non-convex faces).
+    #[must_use]
+    pub fn polygon_count(&self) -> usize {
+        self.polygon_face.len()
+    }
+
+    /// Number of face ids this mesh uses (including dropped degenerate faces).
+    #[must_use]
+    pub fn face_count(&self) -> u32 {
+        self.face_count
+    }
+
+    /// The vertex indices of polygon `i`, counter-clockwise seen from its front.
+    #[inline]
+    #[must_use]
+    pub fn polygon(&self, i: usize) -> &[u32] {
+        let s = self.polygon_starts[i] as usize;
+        let e = self.polygon_starts[i + 1] as usize;
+        &self.polygon_indices[s..e]
+    }
+
+    /// The local face id of polygon `i`.
+    #[inline]
+    #[must_use]
+    pub fn polygon_face(&self, i: usize) -> u32 {
+        self.polygon_face[i]
+    }
+
+    /// The CSR arrays: `starts` (one more than the polygon count) and `indices`.
+    #[must_use]
+    pub fn polygon_arrays(&self) -> (&[u32], &[u32], &[u32]) {
+        (
+            &self.polygon_starts,
+            &self.polygon_indices,
+            &self.polygon_face,
+        )
+    }
+
+    /// Whether every polygon is a triangle.
+    #[must_use]
+    pub fn is_triangle_mesh(&self) -> bool {
+        self.polygon_indices.len() == 3 * self.polygon_face.len()
+    }
+
+    /// The polygons that came from local face `face` (empty if it was dropped).
+    #[must_use]
+    pub fn polygons_of_face(&self, face: u32) -> Range<usize> {
+        let lo = self.polygon_face.partition_point(|&f| f < face);
+        let hi = self.polygon_face.partition_point(|&f| f <= face);
+        lo..hi
+    }
+
+    /// The polygon's vertices.
+    #[must_use]
+    pub fn polygon_points(&self, i: usize) -> Vec<DVec3> {
+        self.polygon(i)
+            .iter()
+            .map(|&v| self.positions[v as usize])
+            .collect()
+    }
+
+    /// The plane of polygon `i` by Newell's method (object space).
+    #[must_use]
+    pub fn polygon_plane(&self, i: usize) -> Option<Plane> {
+        Plane::newell(&self.polygon_points(i))
+    }
+
+    /// The materials referenced by faces.
+    #[must_use]
+    pub fn materials(&self) -> &[Material] {
+        &self.materials
+    }
+
+    /// The material of a local face, if faces carry materials.
+    #[must_use]
+    pub fn face_material(&self, face: u32) -> Option<&Material> {
+        let m = *self.face_material.get(face as usize)?;
+        self.materials.get(m as usize)
+    }
+
+    /// The box of the vertices actually used by polygons.
+    #[must_use]
+    pub fn bounds(&self) -> geom::Aabb {
+        geom::Aabb::from_points(
+            self.polygon_indices
+                .iter()
+                .map(|&i| self.positions[i as usize]),
+        )
+    }
+}
+
+/// Why a face was refused (as opposed to dropped): the loader turns this into an
+/// [`crate::Error`] naming the file and line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FaceError {
+    /// A vertex index is not below the number of vertices.
+    IndexOutOfRange {
+        /// The offending (0-based) index.
+        index: u64,
+        /// How many vertices there are.
+        count: usize,
+    },
+}
+
+impl std::fmt::Display for FaceError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FaceError::IndexOutOfRange { index, count } => write!(
+                f,
+                "vertex index {index} is out of range (the mesh has {count} vertices, indices 0..{})",
+                count.saturating_sub(1)
+            ),
+        }
+    }
+}
+
+/// What [`MeshBuilder::push_face`] did with a face.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceOutcome {
+    /// Kept as one polygon.
+    Kept,
+    /// Split into this many triangles (non-planar or concave).
+    Triangulated(usize),
+    /// Dropped as degenerate.
+    Dropped,
+}
+
+/// Relative tolerance for planarity: a vertex farther than this times the face's
+/// diameter from the Newell plane makes the face non-planar.
+pub const PLANARITY_TOLERANCE: f64 = 1e-6;
+
+/// Relative tolerance for degeneracy: a face whose area is below this times its
+/// diameter squared has zero area.
+pub const DEGENERACY_TOLERANCE: f64 = 1e-14;
+
+/// Builds a [`Mesh`] from vertices and faces, applying the rules of the module doc.
+#[derive(Debug, Default)]
+pub struct MeshBuilder {
+    mesh: Mesh,
+    report: LoadReport,
+    scratch: Vec<u32>,
+    points: Vec<DVec3>,
+}
+
+impl MeshBuilder {
+    /// An empty builder.
+    #[must_use]
+    pub fn new() -> Self {
+        let mut b = Self::default();
+        b.mesh.polygon_starts.push(0);
+        b
+    }
+
+    /// An empty builder with room for `vertices` and `faces` triangles.
+    #[must_use]
+    pub fn with_capacity(vertices: usize, faces: usize) -> Self {
+        let mut b = Self::new();
+        b.mesh.positions.reserve(vertices);
+        b.mesh.polygon_starts.reserve(faces);
+        b.mesh.polygon_indices.reserve(faces * 3);
+        b.mesh.polygon_face.reserve(faces);
+        b
+    }
+
+    /// Number of vertices so far.
+    #[must_use]
+    pub fn vertex_count(&self) -> usize {
+        self.mesh.positions.len()
+    }
+
+    /// Number of face ids used so far.
+    #[must_use]
+    pub fn face_count(&self) -> u32 {
+        self.mesh.face_count
+    }
+
+    /// Adds a vertex and returns its index. The caller must have checked that it is
+    /// finite (loaders report non-finite coordinates with their file and line).
+    pub fn push_position(&mut self, p: DVec3) -> u32 {
+        debug_assert!(p.is_finite(), "loaders must refuse non-finite coordinates");
+        self.mesh.positions.push(p);
+        (self.mesh.positions.len() - 1) as u32
+    }
+
+    /// Adds a material and returns its index.
+    pub fn push_material(&mut self, material: Material) -> u32 {
+        self.mesh.materials.push(material);
+        (self.mesh.materials.len() - 1) as u32
+    }
+
+    /// Adds a warning message to the report.
+    pub fn warn(&mut self, message: impl Into<String>) {
+        self.report.messages.push(message.into());
+    }
+
+    /// Adds a face (vertex indices, counter-clockwise seen from the front) with an
+    /// optional material. The face takes the next face id whatever happens to it.
+    pub fn push_face(
+        &mut self,
+        indices: &[u32],
+        material: Option<u32>,
+    ) -> Result<FaceOutcome, FaceError> {
+        let count = self.mesh.positions.len();
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= count) {
+            return Err(FaceError::IndexOutOfRange {
+                index: u64::from(bad),
+                count,
+            });
+        }
+        let face = self.mesh.face_count;
+        self.mesh.face_count += 1;
+        if let Some(m) = material {
+            if self.mesh.face_material.len() < face as usize {
+                // Earlier faces had no material: give them an explicit "none".
+                self.mesh.face_material.resize(face as usize, u32::MAX);
+            }
+            self.mesh.face_material.push(m);
+        } else if !self.mesh.face_material.is_empty() {
+            self.mesh.face_material.push(u32::MAX);
+        }
+        Ok(self.add_polygon_checked(indices, face))
+    }
+
+    fn add_polygon_checked(&mut self, indices: &[u32], face: u32) -> FaceOutcome {
+        let pos = &self.mesh.positions;
+        if indices.len() == 3 {
+            // Fast path for triangles.
+            let (a, b, c) = (
+                pos[indices[0] as usize],
+                pos[indices[1] as usize],
+                pos[indices[2] as usize],
+            );
+            let n = (b - a).cross(c - a);
+            let diam2 = (b - a)
+                .length_squared()
+                .max((c - a).length_squared())
+                .max((c - b).length_squared());
+            if !(n.length() > DEGENERACY_TOLERANCE * diam2) {
+                self.report.degenerate_faces += 1;
+                return FaceOutcome::Dropped;
+            }
+            self.emit(indices, face);
+            return FaceOutcome::Kept;
+        }
+        // Remove repeated vertices (consecutive, and closing) by position.
+        self.scratch.clear();
+        for &i in indices {
+            let p = pos[i as usize];
+            if self.scratch.last().is_some_and(|&l| pos[l as usize] == p) {
+                continue;
+            }
+            self.scratch.push(i);
+        }
+        while self.scratch.len() > 1
+            && pos[self.scratch[0] as usize] == pos[*self.scratch.last().unwrap() as usize]
+        {
+            self.scratch.pop();
+        }
+        self.points.clear();
+        self.points
+            .extend(self.scratch.iter().map(|&i| pos[i as usize]));
+        let points = &self.points;
+        if points.len() < 3 {
+            self.report.degenerate_faces += 1;
+            return FaceOutcome::Dropped;
+        }
+        let normal = geom::newell_normal(points);
+        let diameter = geom::Aabb::from_points(points.iter().copied())
+            .extent()
+            .length();
+        if !(normal.length() * 0.5 > DEGENERACY_TOLERANCE * diameter * diameter) {
+            self.report.degenerate_faces += 1;
+            return FaceOutcome::Dropped;
+        }
+        let scratch = std::mem::take(&mut self.scratch);
+        let outcome = if points.len() == 3 {
+            self.emit(&scratch, face);
+            FaceOutcome::Kept
+        } else {
+            let planar = geom::max_plane_deviation(points) <= PLANARITY_TOLERANCE * diameter;
+            if planar && geom::is_convex(points) {
+                self.emit(&scratch, face);
+                FaceOutcome::Kept
+            } else {
+                if planar {
+                    self.report.concave_faces += 1;
+                } else {
+                    self.report.nonplanar_faces += 1;
+                }
+                let tris = geom::triangulate(&self.points);
+                let mut kept = 0;
+                for t in &tris {
+                    let tri = [
+                        scratch[t[0] as usize],
+                        scratch[t[1] as usize],
+                        scratch[t[2] as usize],
+                    ];
+                    let p = &self.mesh.positions;
+                    let (a, b, c) = (p[tri[0] as usize], p[tri[1] as usize], p[tri[2] as usize]);
+                    // Skip slivers of zero area that ear clipping can leave on collinear runs.
+                    if (b - a).cross(c - a).length() > DEGENERACY_TOLERANCE * diameter * diameter {
+                        self.emit(&tri, face);
+                        kept += 1;
+                    }
+                }
+                FaceOutcome::Triangulated(kept)
+            }
+        };
+        self.scratch = scratch;
+        outcome
+    }
+
+    fn emit(&mut self, indices: &[u32], face: u32) {
+        self.mesh.polygon_indices.extend_from_slice(indices);
+        self.mesh
+            .polygon_starts
+            .push(self.mesh.polygon_indices.len() as u32);
+        self.mesh.polygon_face.push(face);
+    }
+
+    /// The mesh and what was fixed or dropped on the way.
+    #[must_use]
+    pub fn finish(mut self) -> (Mesh, LoadReport) {
+        if !self.mesh.face_material.is_empty() {
+            self.mesh
+                .face_material
+                .resize(self.mesh.face_count as usize, u32::MAX);
+        }
+        (self.mesh, self.report)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn builder(points: &[(f64, f64, f64)]) -> MeshBuilder {
+        let mut b = MeshBuilder::new();
+        for &(x, y, z) in points {
+            b.push_position(DVec3::new(x, y, z));
+        }
+        b
+    }
+
+    #[test]
+    fn triangles_quads_and_ids() {
+        let mut b = builder(&[
+            (0., 0., 0.),
+            (1., 0., 0.),
+            (1., 1., 0.),
+            (0., 1., 0.),
+            (2., 2., 0.),
+        ]);
+        assert_eq!(b.push_face(&[0, 1, 2], None), Ok(FaceOutcome::Kept));
+        assert_eq!(b.push_face(&[0, 1, 2, 3], None), Ok(FaceOutcome::Kept));
+        // collinear: degenerate, dropped, but the id is consumed
+        assert_eq!(b.push_face(&[0, 2, 4], None), Ok(FaceOutcome::Dropped));
+        assert_eq!(b.push_face(&[0, 0, 1], None), Ok(FaceOutcome::Dropped));
+        assert_eq!(b.push_face(&[1, 2, 3], None), Ok(FaceOutcome::Kept));
+        assert_eq!(
+            b.push_face(&[0, 9, 1], None),
+            Err(FaceError::IndexOutOfRange { index: 9, count: 5 })
+        );
+        let (m, r) = b.finish();
+        assert_eq!(m.polygon_count(), 3);
+        assert_eq!(m.face_count(), 5);
+        assert_eq!(
+            (m.polygon_face(0), m.polygon_face(1), m.polygon_face(2)),
+            (0, 1, 4)
+        );
+        assert_eq!(m.polygon(1), &[0, 1, 2, 3]);
+        assert_eq!(r.degenerate_faces, 2);
+        assert_eq!(m.polygons_of_face(2), 2..2);
+        assert_eq!(m.polygons_of_face(4), 2..3);
+    }
+
+    #[test]
+    fn nonplanar_and_concave_faces_are_triangulated_with_one_id() {
+        let mut b = builder(&[(0., 0., 0.), (1., 0., 0.), (1., 1., 0.3), (0., 1., 0.)]);
+        assert_eq!(
+            b.push_face(&[0, 1, 2, 3], None),
+            Ok(FaceOutcome::Triangulated(2))
+        );
+        let mut c = builder(&[
+            (0., 0., 0.),
+            (2., 0., 0.),
+            (1., 0.5, 0.),
+            (2., 2., 0.),
+            (0., 2., 0.),
+        ]);
+        assert_eq!(
+            c.push_face(&[0, 1, 2, 3, 4], None),
+            Ok(FaceOutcome::Triangulated(3))
+        );
+        let (m, r) = b.finish();
+        assert_eq!(r.nonplanar_faces, 1);
+        assert_eq!(m.polygon_count(), 2);
+        assert_eq!(m.polygons_of_face(0), 0..2);
+        let (_, r) = c.finish();
+        assert_eq!(r.concave_faces, 1);
+        assert_eq!(r.nonplanar_faces, 0);
+    }
+
+    #[test]
+    fn materials_per_face() {
+        let mut b = builder(&[(0., 0., 0.), (1., 0., 0.), (1., 1., 0.)]);
+        b.push_face(&[0, 1, 2], None).unwrap();
+        let red = b.push_material(Material {
+            name: "red".into(),
+            color: [1., 0., 0.],
+        });
+        b.push_face(&[0, 1, 2], Some(red)).unwrap();
+        b.push_face(&[0, 1, 2], None).unwrap();
+        let (m, _) = b.finish();
+        assert!(m.face_material(0).is_none());
+        assert_eq!(m.face_material(1).unwrap().name, "red");
+        assert!(m.face_material(2).is_none());
+    }
+}

@@ -1,0 +1,405 @@
+//! Scenes: objects made of planar faces, each with a transform, a colour and flags,
+//! plus an optional camera.
+//!
+//! # Face ids
+//! Faces are numbered from 0 in load order across the whole scene: object `k`'s local
+//! face `f` has id `objects[k].first_face + f`. For OBJ files that is the order of the
+//! `f` lines across all objects. An n-gon split into triangles keeps one id; a dropped
+//! degenerate face keeps its id too (it just never appears in an image).
+
+mod adjacency;
+mod camera;
+pub mod demo;
+pub mod load;
+mod mesh;
+
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{DMat4, DVec3};
+
+pub use adjacency::{EdgeAdjacency, MeshEdge, is_convex_closed};
+pub use camera::{Camera, Projection, Ray, Viewport};
+pub use mesh::{
+    DEGENERACY_TOLERANCE, FaceError, FaceOutcome, LoadReport, Material, Mesh, MeshBuilder,
+    PLANARITY_TOLERANCE,
+};
+
+use crate::geom::{Aabb, Sphere};
+use crate::{Error, Result};
+
+/// What is needed to add an object to a scene.
+#[derive(Clone, Debug)]
+pub struct ObjectDesc {
+    /// A name for messages (file object/group name, or made up).
+    pub name: String,
+    /// The geometry, shareable between objects.
+    pub mesh: Arc<Mesh>,
+    /// Object to world (affine).
+    pub transform: DMat4,
+    /// Colour (linear RGB, 0..=1) for faces without a material.
+    pub color: [f32; 3],
+    /// Closed oriented 2-manifold (back faces may be culled); `None` detects it.
+    pub closed: Option<bool>,
+    /// Convex (implies closed); `None` detects it.
+    pub convex: Option<bool>,
+}
+
+impl ObjectDesc {
+    /// An object with identity transform, a default colour and detected flags.
+    #[must_use]
+    pub fn new(name: impl Into<String>, mesh: Mesh) -> Self {
+        ObjectDesc {
+            name: name.into(),
+            mesh: Arc::new(mesh),
+            transform: DMat4::IDENTITY,
+            color: [0.8, 0.8, 0.8],
+            closed: None,
+            convex: None,
+        }
+    }
+
+    /// Sets the transform.
+    #[must_use]
+    pub fn with_transform(mut self, transform: DMat4) -> Self {
+        self.transform = transform;
+        self
+    }
+
+    /// Sets the colour.
+    #[must_use]
+    pub fn with_color(mut self, color: [f32; 3]) -> Self {
+        self.color = color;
+        self
+    }
+
+    /// Sets the closed flag (instead of detecting it).
+    #[must_use]
+    pub fn with_closed(mut self, closed: bool) -> Self {
+        self.closed = Some(closed);
+        self
+    }
+
+    /// Sets the convex flag (instead of detecting it).
+    #[must_use]
+    pub fn with_convex(mut self, convex: bool) -> Self {
+        self.convex = Some(convex);
+        self
+    }
+}
+
+/// An object of a scene.
+#[derive(Clone, Debug)]
+pub struct Object {
+    /// Its name.
+    pub name: String,
+    /// Its geometry.
+    pub mesh: Arc<Mesh>,
+    /// Object to world.
+    pub transform: DMat4,
+    /// Colour of faces without a material.
+    pub color: [f32; 3],
+    /// Closed oriented 2-manifold: its back faces can never be seen from outside.
+    pub closed: bool,
+    /// Convex.
+    pub convex: bool,
+    /// The scene-wide id of local face 0.
+    pub first_face: u32,
+    /// Whether the transform mirrors (negative determinant): winding flips in world space.
+    pub mirrored: bool,
+    /// World-space box.
+    pub bounds: Aabb,
+    /// World-space bounding sphere.
+    pub sphere: Sphere,
+}
+
+impl Object {
+    /// The world-space vertices of polygon `i`.
+    #[must_use]
+    pub fn world_polygon(&self, i: usize) -> Vec<DVec3> {
+        self.mesh
+            .polygon(i)
+            .iter()
+            .map(|&v| {
+                self.transform
+                    .transform_point3(self.mesh.positions()[v as usize])
+            })
+            .collect()
+    }
+
+    /// Colour of a local face: its material's, else the object's.
+    #[must_use]
+    pub fn face_color(&self, face: u32) -> [f32; 3] {
+        self.mesh
+            .face_material(face)
+            .map_or(self.color, |m| m.color)
+    }
+}
+
+/// A scene: objects and an optional camera.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    objects: Vec<Object>,
+    camera: Option<Camera>,
+    up: Option<DVec3>,
+    report: LoadReport,
+    face_count: u32,
+}
+
+/// Colours given to objects that have none, in order.
+pub const PALETTE: [[f32; 3]; 8] = [
+    [0.90, 0.45, 0.25],
+    [0.30, 0.60, 0.90],
+    [0.55, 0.80, 0.35],
+    [0.95, 0.80, 0.30],
+    [0.70, 0.45, 0.85],
+    [0.35, 0.80, 0.80],
+    [0.90, 0.40, 0.60],
+    [0.75, 0.75, 0.70],
+];
+
+impl Scene {
+    /// An empty scene.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Loads a scene from a spec: `demo:NAME` for a built-in scene, else a file path
+    /// (`.obj`, `.gltf`, `.glb`, `.stl`, `.ply`, or a `.toml` scene file).
+    pub fn load(spec: &str) -> Result<Scene> {
+        if let Some(name) = spec.strip_prefix("demo:") {
+            return demo::scene(name);
+        }
+        load::load_file(Path::new(spec))
+    }
+
+    /// Adds an object, checking it, assigning its face ids and computing its bounds
+    /// and flags. Returns its index.
+    pub fn add(&mut self, desc: ObjectDesc) -> Result<usize> {
+        let invalid = |m: String| Error::InvalidObject {
+            object: desc.name.clone(),
+            message: m,
+        };
+        if !desc.transform.is_finite() {
+            return Err(invalid("the transform has non-finite entries".into()));
+        }
+        let det = desc.transform.determinant();
+        if det == 0.0 || !det.is_finite() {
+            return Err(invalid(
+                "the transform is singular (flattens the object)".into(),
+            ));
+        }
+        if let Some(p) = desc.mesh.positions().iter().find(|p| !p.is_finite()) {
+            return Err(invalid(format!("vertex {:?} is not finite", p.to_array())));
+        }
+        let world: Vec<DVec3> = {
+            let (_, idx, _) = desc.mesh.polygon_arrays();
+            let mut used = vec![false; desc.mesh.positions().len()];
+            for &i in idx {
+                used[i as usize] = true;
+            }
+            desc.mesh
+                .positions()
+                .iter()
+                .zip(&used)
+                .filter(|(_, u)| **u)
+                .map(|(&p, _)| desc.transform.transform_point3(p))
+                .collect()
+        };
+        if let Some(p) = world.iter().find(|p| !p.is_finite()) {
+            return Err(invalid(format!(
+                "a vertex overflows to {:?} when transformed",
+                p.to_array()
+            )));
+        }
+        let bounds = Aabb::from_points(world.iter().copied());
+        let sphere = Sphere::bounding(&world).unwrap_or(Sphere {
+            center: DVec3::ZERO,
+            radius: 0.0,
+        });
+        let (closed, convex) = match (desc.closed, desc.convex) {
+            (Some(c), Some(v)) => (c, v && c),
+            (c, v) => {
+                let adj = EdgeAdjacency::new(&desc.mesh);
+                let closed = c.unwrap_or_else(|| adj.is_closed());
+                let convex =
+                    v.unwrap_or_else(|| closed && is_convex_closed(&desc.mesh, &adj, 1e-9));
+                (closed, convex && closed)
+            }
+        };
+        let first_face = self.face_count;
+        let faces = desc.mesh.face_count();
+        self.face_count = first_face
+            .checked_add(faces)
+            .ok_or_else(|| invalid("more than 2^32 faces in the scene".into()))?;
+        self.objects.push(Object {
+            name: desc.name,
+            mesh: desc.mesh,
+            transform: desc.transform,
+            color: desc.color,
+            closed,
+            convex,
+            first_face,
+            mirrored: det < 0.0,
+            bounds,
+            sphere,
+        });
+        Ok(self.objects.len() - 1)
+    }
+
+    /// The objects, in load order.
+    #[must_use]
+    pub fn objects(&self) -> &[Object] {
+        &self.objects
+    }
+
+    /// The camera the scene file carries, if any.
+    #[must_use]
+    pub fn camera(&self) -> Option<&Camera> {
+        self.camera.as_ref()
+    }
+
+    /// Sets the scene's camera.
+    pub fn set_camera(&mut self, camera: Option<Camera>) {
+        self.camera = camera;
+    }
+
+    /// The scene's up axis, if known (used to frame the scene when no camera is given).
+    #[must_use]
+    pub fn up(&self) -> DVec3 {
+        self.up.unwrap_or(DVec3::Y)
+    }
+
+    /// Sets the scene's up axis.
+    pub fn set_up(&mut self, up: DVec3) {
+        self.up = Some(up);
+    }
+
+    /// What loading fixed or dropped.
+    #[must_use]
+    pub fn report(&self) -> &LoadReport {
+        &self.report
+    }
+
+    /// Mutable access to the report (for loaders).
+    pub fn report_mut(&mut self) -> &mut LoadReport {
+        &mut self.report
+    }
+
+    /// Number of face ids in the scene.
+    #[must_use]
+    pub fn face_count(&self) -> u32 {
+        self.face_count
+    }
+
+    /// Number of polygons (after triangulation) in the scene.
+    #[must_use]
+    pub fn polygon_count(&self) -> usize {
+        self.objects.iter().map(|o| o.mesh.polygon_count()).sum()
+    }
+
+    /// Number of triangles the polygons would make.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.objects
+            .iter()
+            .map(|o| {
+                let (starts, _, _) = o.mesh.polygon_arrays();
+                starts
+                    .windows(2)
+                    .map(|w| (w[1] - w[0]) as usize - 2)
+                    .sum::<usize>()
+            })
+            .sum()
+    }
+
+    /// The world-space box of everything.
+    #[must_use]
+    pub fn bounds(&self) -> Aabb {
+        self.objects
+            .iter()
+            .fold(Aabb::EMPTY, |b, o| b.union(o.bounds))
+    }
+
+    /// The object and local face of a face id.
+    #[must_use]
+    pub fn locate_face(&self, id: u32) -> Option<(usize, u32)> {
+        if id >= self.face_count {
+            return None;
+        }
+        let k = self.objects.partition_point(|o| o.first_face <= id) - 1;
+        Some((k, id - self.objects[k].first_face))
+    }
+
+    /// Fails with [`Error::EmptyScene`] when there is no polygon to render.
+    pub fn ensure_not_empty(&self, what: &str) -> Result<()> {
+        if self.polygon_count() == 0 {
+            let why = if self.objects.is_empty() {
+                format!("{what} has no objects")
+            } else {
+                format!(
+                    "{what} has {} object(s) but no usable face",
+                    self.objects.len()
+                )
+            };
+            return Err(Error::EmptyScene(why));
+        }
+        Ok(())
+    }
+
+    /// The default camera for this scene: its own if it has one, else one framing
+    /// its bounds.
+    #[must_use]
+    pub fn default_camera(&self, aspect: f64) -> Camera {
+        self.camera
+            .unwrap_or_else(|| Camera::framing(&self.bounds(), aspect, self.up(), 45.0))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_span_objects_and_flags_are_detected() {
+        let mut s = Scene::new();
+        let cube = demo::box_mesh(DVec3::ZERO, DVec3::ONE);
+        let a = s.add(ObjectDesc::new("a", cube.clone())).unwrap();
+        let b = s
+            .add(
+                ObjectDesc::new("b", demo::grid_mesh(1., 1., 2, 2))
+                    .with_transform(DMat4::from_scale(DVec3::new(-1., 1., 1.))),
+            )
+            .unwrap();
+        assert_eq!((a, b), (0, 1));
+        assert_eq!(s.face_count(), 6 + 4);
+        assert_eq!(s.locate_face(5), Some((0, 5)));
+        assert_eq!(s.locate_face(6), Some((1, 0)));
+        assert_eq!(s.locate_face(10), None);
+        assert!(s.objects()[0].closed && s.objects()[0].convex);
+        assert!(!s.objects()[1].closed && s.objects()[1].mirrored);
+    }
+
+    #[test]
+    fn bad_objects_are_refused_with_their_name() {
+        let mut s = Scene::new();
+        let e = s
+            .add(
+                ObjectDesc::new("flat", demo::box_mesh(DVec3::ZERO, DVec3::ONE))
+                    .with_transform(DMat4::from_scale(DVec3::new(1., 0., 1.))),
+            )
+            .unwrap_err();
+        assert!(e.to_string().contains("\"flat\""), "{e}");
+        let mut m = DMat4::IDENTITY;
+        m.w_axis.x = f64::NAN;
+        let e = s
+            .add(ObjectDesc::new("nan", demo::box_mesh(DVec3::ZERO, DVec3::ONE)).with_transform(m))
+            .unwrap_err();
+        assert!(e.to_string().contains("nan"), "{e}");
+        assert!(matches!(
+            s.ensure_not_empty("test"),
+            Err(Error::EmptyScene(_))
+        ));
+    }
+}

@@ -1,0 +1,312 @@
+//! Hidden-surface removal: every algorithm of the seeds behind one interface.
+//!
+//! Each algorithm takes the same [`PreparedView`] and returns the same [`Frame`] (face
+//! id and eye-space depth per pixel), plus [`Stats`] that show how it worked. Any two
+//! frames can be compared pixel by pixel; the test suite demands that they agree.
+//!
+//! | algorithm | module | seed |
+//! | --- | --- | --- |
+//! | z-buffer (reference) | [`zbuffer`] | 000, 002, 003, 004 |
+//! | scanline | [`scanline`] | 003 |
+//! | depth sort (Newell-Newell-Sancha), covering-matrix variant | [`depth_sort`] | 000, 002, 003 |
+//! | BSP tree | [`bsp`] | 000 |
+//! | Warnock area subdivision | [`warnock`] | 003 |
+//! | ray casting: brute force, bounding volumes, BVH, uniform grid | [`raycast`] | 000, 002 |
+//! | octree | [`octree`] | 000, 003 |
+//!
+//! Ties: nearer wins; on an exact depth tie the lower face id wins, in every algorithm.
+
+pub mod bsp;
+pub mod depth_sort;
+pub mod octree;
+pub mod raycast;
+pub mod scanline;
+pub mod warnock;
+pub mod zbuffer;
+
+use std::fmt;
+use std::str::FromStr;
+use std::sync::Arc;
+use std::time::Instant;
+
+use serde::ser::{Serialize, SerializeMap, Serializer};
+
+use crate::geom::BoundsKind;
+use crate::raster::FillRule;
+use crate::view::PreparedView;
+use crate::{Error, Frame, Result};
+
+/// A hidden-surface algorithm.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Algorithm {
+    /// Z-buffer: the reference.
+    ZBuffer,
+    /// Scanline with an active edge list.
+    Scanline,
+    /// Depth sort with the five Newell tests.
+    DepthSort,
+    /// Depth sort by covering matrix and topological order (seed 003).
+    DepthSortMatrix,
+    /// Binary space partitioning tree.
+    Bsp,
+    /// Warnock area subdivision.
+    Warnock,
+    /// Ray casting, brute force.
+    Raycast,
+    /// Ray casting with per-object bounding volumes.
+    RaycastBounds,
+    /// Ray casting with a bounding-volume hierarchy.
+    RaycastBvh,
+    /// Ray casting through a uniform grid.
+    RaycastGrid,
+    /// Front-to-back rendering of a voxel octree.
+    Octree,
+}
+
+impl Algorithm {
+    /// Every algorithm, in the order `compare` shows them.
+    pub const ALL: [Algorithm; 11] = [
+        Algorithm::ZBuffer,
+        Algorithm::Scanline,
+        Algorithm::DepthSort,
+        Algorithm::DepthSortMatrix,
+        Algorithm::Bsp,
+        Algorithm::Warnock,
+        Algorithm::Raycast,
+        Algorithm::RaycastBounds,
+        Algorithm::RaycastBvh,
+        Algorithm::RaycastGrid,
+        Algorithm::Octree,
+    ];
+
+    /// The command-line name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::ZBuffer => "zbuffer",
+            Algorithm::Scanline => "scanline",
+            Algorithm::DepthSort => "depth-sort",
+            Algorithm::DepthSortMatrix => "depth-sort-matrix",
+            Algorithm::Bsp => "bsp",
+            Algorithm::Warnock => "warnock",
+            Algorithm::Raycast => "raycast",
+            Algorithm::RaycastBounds => "raycast-bounds",
+            Algorithm::RaycastBvh => "raycast-bvh",
+            Algorithm::RaycastGrid => "raycast-grid",
+            Algorithm::Octree => "octree",
+        }
+    }
+
+    /// Whether the algorithm computes exact polygon visibility (all but the octree,
+    /// which approximates the solids by voxels).
+    #[must_use]
+    pub fn is_exact(self) -> bool {
+        self != Algorithm::Octree
+    }
+}
+
+impl fmt::Display for Algorithm {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Algorithm {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Algorithm::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| {
+                Error::option(
+                    "--algo",
+                    format!(
+                        "unknown algorithm \"{s}\" (known: {})",
+                        Algorithm::ALL.map(Algorithm::name).join(", ")
+                    ),
+                )
+            })
+    }
+}
+
+/// A progress callback: called with the fraction done, in 0..=1.
+pub type Progress = Arc<dyn Fn(f64) + Send + Sync>;
+
+/// Options shared by the algorithms (each reads what concerns it).
+#[derive(Clone)]
+#[non_exhaustive]
+pub struct RenderOptions {
+    /// Which samples on polygon edges are covered.
+    pub fill_rule: FillRule,
+    /// The bounding volume of `raycast-bounds`.
+    pub bounds: BoundsKind,
+    /// BSP construction options.
+    pub bsp: crate::accel::bsp::BspOptions,
+    /// Octree depth (the voxel grid is `2^depth` on a side).
+    pub octree_depth: u32,
+    /// Called as long work progresses.
+    pub progress: Option<Progress>,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            fill_rule: FillRule::TopLeft,
+            bounds: BoundsKind::Aabb,
+            bsp: crate::accel::bsp::BspOptions::default(),
+            octree_depth: 7,
+            progress: None,
+        }
+    }
+}
+
+impl fmt::Debug for RenderOptions {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("RenderOptions")
+            .field("fill_rule", &self.fill_rule)
+            .field("bounds", &self.bounds)
+            .field("bsp", &self.bsp)
+            .field("octree_depth", &self.octree_depth)
+            .field("progress", &self.progress.is_some())
+            .finish()
+    }
+}
+
+impl RenderOptions {
+    /// These options with another fill rule.
+    #[must_use]
+    pub fn with_fill_rule(mut self, fill_rule: FillRule) -> Self {
+        self.fill_rule = fill_rule;
+        self
+    }
+
+    /// These options with another bounding volume for `raycast-bounds`.
+    #[must_use]
+    pub fn with_bounds(mut self, bounds: BoundsKind) -> Self {
+        self.bounds = bounds;
+        self
+    }
+
+    /// These options with other BSP construction options.
+    #[must_use]
+    pub fn with_bsp(mut self, bsp: crate::accel::bsp::BspOptions) -> Self {
+        self.bsp = bsp;
+        self
+    }
+
+    /// These options with another octree depth.
+    #[must_use]
+    pub fn with_octree_depth(mut self, depth: u32) -> Self {
+        self.octree_depth = depth;
+        self
+    }
+
+    /// These options with a progress callback.
+    #[must_use]
+    pub fn with_progress(mut self, progress: Progress) -> Self {
+        self.progress = Some(progress);
+        self
+    }
+
+    /// Reports progress if someone listens.
+    pub fn report(&self, fraction: f64) {
+        if let Some(p) = &self.progress {
+            p(fraction.clamp(0.0, 1.0));
+        }
+    }
+}
+
+/// Named numbers that show how an algorithm worked (pixels tested, BSP splits,
+/// Warnock windows per rule...), in insertion order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stats {
+    /// `(name, value)` pairs.
+    pub entries: Vec<(String, f64)>,
+}
+
+impl Stats {
+    /// Sets a value (replacing an earlier one of the same name).
+    pub fn set(&mut self, name: &str, value: f64) {
+        match self.entries.iter_mut().find(|(k, _)| k == name) {
+            Some(e) => e.1 = value,
+            None => self.entries.push((name.to_string(), value)),
+        }
+    }
+
+    /// Adds to a value (starting from 0).
+    pub fn add(&mut self, name: &str, value: f64) {
+        let old = self.get(name).unwrap_or(0.0);
+        self.set(name, old + value);
+    }
+
+    /// A value by name.
+    #[must_use]
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.entries.iter().find(|(k, _)| k == name).map(|e| e.1)
+    }
+}
+
+impl Serialize for Stats {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.entries.len()))?;
+        for (k, v) in &self.entries {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+/// Renders a prepared view with an algorithm. The stats end with `time_ms`.
+///
+/// ```
+/// use obscura::{scene::{demo, Viewport}, view::{prepare, PrepareOptions}};
+/// use obscura::surface::{render, Algorithm, RenderOptions};
+/// let scene = demo::cube();
+/// let vp = Viewport::new(64, 48).unwrap();
+/// let view = prepare(&scene, &scene.default_camera(vp.aspect()), vp, &PrepareOptions::default()).unwrap();
+/// let (frame, stats) = render(Algorithm::ZBuffer, &view, &RenderOptions::default()).unwrap();
+/// assert!(frame.covered_pixels() > 0);
+/// assert!(stats.get("time_ms").is_some());
+/// ```
+pub fn render(
+    algorithm: Algorithm,
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    let start = Instant::now();
+    let (frame, mut stats) = match algorithm {
+        Algorithm::ZBuffer => zbuffer::render(view, options),
+        Algorithm::Scanline => scanline::render(view, options),
+        Algorithm::DepthSort => depth_sort::render(view, options),
+        Algorithm::DepthSortMatrix => depth_sort::render_matrix(view, options),
+        Algorithm::Bsp => bsp::render(view, options),
+        Algorithm::Warnock => warnock::render(view, options),
+        Algorithm::Raycast => raycast::render(view, raycast::Acceleration::BruteForce, options),
+        Algorithm::RaycastBounds => {
+            raycast::render(view, raycast::Acceleration::Bounds(options.bounds), options)
+        }
+        Algorithm::RaycastBvh => raycast::render(view, raycast::Acceleration::Bvh, options),
+        Algorithm::RaycastGrid => raycast::render(view, raycast::Acceleration::Grid, options),
+        Algorithm::Octree => octree::render(view, options),
+    }?;
+    stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
+    Ok((frame, stats))
+}
+
+/// The error of an algorithm that is not available yet.
+pub(crate) fn not_yet(algorithm: Algorithm) -> Error {
+    Error::option("--algo", format!("{algorithm} is not implemented yet"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for a in Algorithm::ALL {
+            assert_eq!(a.name().parse::<Algorithm>().unwrap(), a);
+        }
+        assert!("nope".parse::<Algorithm>().is_err());
+    }
+}

@@ -1,0 +1,733 @@
+//! The shared front end: from a scene, a camera and a viewport to screen-space convex
+//! polygons that every image-space algorithm consumes.
+//!
+//! ```text
+//! Scene ─ objects ─► frustum cull (sphere, box in clip space) ─► transform vertices
+//!       (world → eye → clip) ─► back-face cull ─► trivial reject by outcodes
+//!       ─► Sutherland-Hodgman against the six planes (only faces that cross one)
+//!       ─► divide by w, map to pixels ─► PreparedView
+//! ```
+//!
+//! Each stage counts faces in and out and its time ([`PipelineStats`], `--stats`).
+//!
+//! # Conventions
+//! Screen `x` goes right and `y` down in pixels, row 0 at the top. Each vertex keeps
+//! its eye-space position (so object-space algorithms can work in eye space) and a
+//! *depth key* `zq`, affine in screen space, larger nearer: `near / depth` for
+//! perspective, `(far - depth) / (far - near)` for orthographic projections.
+//!
+//! Vertices inside the view volume are transformed once and shared by the polygons
+//! that use them; only polygons crossing a clip plane get new vertices.
+
+use std::time::Instant;
+
+use glam::{DMat4, DVec3, DVec4};
+use serde::Serialize;
+
+use crate::Result;
+use crate::clip::outcode_homogeneous;
+use crate::clip::sutherland_hodgman::{ClipEyeVertex, clip_polygon_homogeneous_masked};
+use crate::cull::backface::BackfaceMode;
+use crate::cull::frustum::{Containment, classify_aabb, classify_sphere, frustum_planes};
+use crate::geom::{Plane, newell_normal};
+use crate::raster::{DepthPlane, FillRule, PolygonCoverage};
+use crate::scene::{Camera, Projection, Scene, Viewport};
+
+/// Options of [`prepare`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct PrepareOptions {
+    /// Which objects get back-face culling.
+    pub backface: BackfaceMode,
+    /// Whether whole objects are culled by their bounding sphere and box.
+    pub frustum_cull_objects: bool,
+}
+
+impl PrepareOptions {
+    /// Back faces of closed objects culled, objects frustum culled.
+    pub const DEFAULT: PrepareOptions = PrepareOptions {
+        backface: BackfaceMode::Closed,
+        frustum_cull_objects: true,
+    };
+
+    /// These options with another back-face mode.
+    #[must_use]
+    pub fn with_backface(mut self, backface: BackfaceMode) -> Self {
+        self.backface = backface;
+        self
+    }
+}
+
+impl Default for PrepareOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// A vertex of a prepared polygon.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewVertex {
+    /// Screen x in pixels (right).
+    pub x: f64,
+    /// Screen y in pixels (down).
+    pub y: f64,
+    /// Depth key: affine in screen space, larger is nearer.
+    pub zq: f64,
+    /// Eye-space position (the camera looks down -z).
+    pub eye: DVec3,
+}
+
+impl ViewVertex {
+    /// Eye-space depth (distance along the view axis).
+    #[must_use]
+    pub fn depth(&self) -> f64 {
+        -self.eye.z
+    }
+}
+
+/// The matrices and constants that map eye space to the screen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewTransform {
+    /// World to eye.
+    pub view: DMat4,
+    /// Eye to clip.
+    pub projection: DMat4,
+    /// World to clip.
+    pub view_projection: DMat4,
+    /// Viewport width in pixels.
+    pub width: f64,
+    /// Viewport height in pixels.
+    pub height: f64,
+    /// Near plane distance.
+    pub near: f64,
+    /// Far plane distance.
+    pub far: f64,
+    /// Parallel projection.
+    pub orthographic: bool,
+}
+
+impl ViewTransform {
+    /// The transform of a camera for a viewport.
+    #[must_use]
+    pub fn new(camera: &Camera, viewport: Viewport) -> Self {
+        let view = camera.view_matrix();
+        let projection = camera.projection_matrix(viewport.aspect());
+        ViewTransform {
+            view,
+            projection,
+            view_projection: projection * view,
+            width: f64::from(viewport.width),
+            height: f64::from(viewport.height),
+            near: camera.near,
+            far: camera.far,
+            orthographic: matches!(camera.projection, Projection::Orthographic { .. }),
+        }
+    }
+
+    /// Eye to clip space.
+    #[inline]
+    #[must_use]
+    pub fn eye_to_clip(&self, eye: DVec3) -> DVec4 {
+        self.projection * eye.extend(1.0)
+    }
+
+    /// The depth key of an eye-space depth.
+    #[inline]
+    #[must_use]
+    pub fn zq_of_depth(&self, depth: f64) -> f64 {
+        if self.orthographic {
+            (self.far - depth) / (self.far - self.near)
+        } else {
+            self.near / depth
+        }
+    }
+
+    /// The eye-space depth of a depth key.
+    #[inline]
+    #[must_use]
+    pub fn depth_of_zq(&self, zq: f64) -> f64 {
+        if self.orthographic {
+            self.far - zq * (self.far - self.near)
+        } else {
+            self.near / zq
+        }
+    }
+
+    /// Divide by w and map to pixels. Only meaningful inside the view volume.
+    #[inline]
+    #[must_use]
+    pub fn to_screen(&self, clip: DVec4, eye: DVec3) -> ViewVertex {
+        let inv_w = 1.0 / clip.w;
+        ViewVertex {
+            x: (clip.x * inv_w + 1.0) * 0.5 * self.width,
+            y: (1.0 - clip.y * inv_w) * 0.5 * self.height,
+            zq: self.zq_of_depth(-eye.z),
+            eye,
+        }
+    }
+
+    /// Whether a face with eye-space normal `normal` (counter-clockwise = front)
+    /// through eye-space `point` is seen from behind.
+    #[inline]
+    #[must_use]
+    pub fn is_back_facing_eye(&self, normal: DVec3, point: DVec3) -> bool {
+        if self.orthographic {
+            crate::cull::backface::is_back_facing_parallel(normal, -DVec3::Z)
+        } else {
+            crate::cull::backface::is_back_facing_perspective(normal, point, DVec3::ZERO)
+        }
+    }
+
+    /// Clips an eye-space convex polygon against the view volume and projects it,
+    /// appending the screen vertices to `out`. Returns how many were appended (0 when
+    /// nothing is visible). For object-space algorithms that make new polygons (BSP
+    /// fragments, depth-sort splits).
+    pub fn clip_and_project(&self, eye_points: &[DVec3], out: &mut Vec<ViewVertex>) -> usize {
+        let input: Vec<ClipEyeVertex> = eye_points
+            .iter()
+            .map(|&e| ClipEyeVertex {
+                clip: self.eye_to_clip(e),
+                eye: e,
+            })
+            .collect();
+        let (mut and, mut or) = (0x3f, 0);
+        for v in &input {
+            let c = outcode_homogeneous(v.clip);
+            and &= c;
+            or |= c;
+        }
+        if and != 0 || input.len() < 3 {
+            return 0;
+        }
+        let (mut clipped, mut scratch) = (Vec::new(), Vec::new());
+        clip_polygon_homogeneous_masked(&input, or, &mut clipped, &mut scratch);
+        out.extend(clipped.iter().map(|v| self.to_screen(v.clip, v.eye)));
+        clipped.len()
+    }
+}
+
+/// Counts and time of one pipeline stage.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StageStats {
+    /// The stage's name.
+    pub stage: &'static str,
+    /// What is counted: `objects`, `vertices`, `faces` or `polygons`.
+    pub unit: &'static str,
+    /// How many went in.
+    pub input: u64,
+    /// How many came out.
+    pub output: u64,
+    /// Milliseconds spent.
+    pub ms: f64,
+}
+
+/// The stages of [`prepare`], in order.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct PipelineStats {
+    /// One entry per stage.
+    pub stages: Vec<StageStats>,
+}
+
+impl PipelineStats {
+    fn push(
+        &mut self,
+        stage: &'static str,
+        unit: &'static str,
+        input: u64,
+        output: u64,
+        since: Instant,
+    ) {
+        self.stages.push(StageStats {
+            stage,
+            unit,
+            input,
+            output,
+            ms: since.elapsed().as_secs_f64() * 1e3,
+        });
+    }
+
+    /// Total milliseconds of all stages.
+    #[must_use]
+    pub fn total_ms(&self) -> f64 {
+        self.stages.iter().map(|s| s.ms).sum()
+    }
+}
+
+/// One prepared polygon: a convex screen-space polygon with its face id.
+#[derive(Clone, Copy, Debug)]
+pub struct ViewPolygon<'a> {
+    /// The scene-wide face id.
+    pub face: u32,
+    /// The object index.
+    pub object: u32,
+    indices: &'a [u32],
+    vertices: &'a [ViewVertex],
+}
+
+impl<'a> ViewPolygon<'a> {
+    /// Number of vertices.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// Whether it has no vertex (never true for polygons of a view).
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+
+    /// Vertex `k`.
+    #[inline]
+    #[must_use]
+    pub fn vertex(&self, k: usize) -> &'a ViewVertex {
+        &self.vertices[self.indices[k] as usize]
+    }
+
+    /// The vertices in order.
+    pub fn vertices(&self) -> impl ExactSizeIterator<Item = &'a ViewVertex> + 'a {
+        let v = self.vertices;
+        self.indices.iter().map(move |&i| &v[i as usize])
+    }
+
+    /// Indices of the vertices in [`PreparedView::vertices`].
+    #[must_use]
+    pub fn indices(&self) -> &'a [u32] {
+        self.indices
+    }
+
+    /// Screen positions.
+    #[must_use]
+    pub fn screen_points(&self) -> Vec<(f64, f64)> {
+        self.vertices().map(|v| (v.x, v.y)).collect()
+    }
+
+    /// Eye-space positions.
+    #[must_use]
+    pub fn eye_points(&self) -> Vec<DVec3> {
+        self.vertices().map(|v| v.eye).collect()
+    }
+
+    /// The plane in eye space (Newell).
+    #[must_use]
+    pub fn eye_plane(&self) -> Option<Plane> {
+        Plane::newell(&self.eye_points())
+    }
+
+    /// The depth-key plane in screen space.
+    #[must_use]
+    pub fn depth_plane(&self) -> Option<DepthPlane> {
+        let pts: Vec<(f64, f64, f64)> = self.vertices().map(|v| (v.x, v.y, v.zq)).collect();
+        DepthPlane::from_points(&pts)
+    }
+
+    /// The pixels it covers in a `width x height` image.
+    #[must_use]
+    pub fn coverage(&self, fill: FillRule, width: u32, height: u32) -> Option<PolygonCoverage> {
+        PolygonCoverage::new(&self.screen_points(), fill, width, height)
+    }
+}
+
+/// The result of [`prepare`]: screen-space convex polygons with face ids and depth keys,
+/// plus everything needed to go back to the scene.
+#[derive(Clone, Debug)]
+pub struct PreparedView<'s> {
+    scene: &'s Scene,
+    camera: Camera,
+    viewport: Viewport,
+    transform: ViewTransform,
+    options: PrepareOptions,
+    vertices: Vec<ViewVertex>,
+    starts: Vec<u32>,
+    indices: Vec<u32>,
+    faces: Vec<u32>,
+    objects: Vec<u32>,
+    stats: PipelineStats,
+}
+
+impl<'s> PreparedView<'s> {
+    /// The scene.
+    #[must_use]
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
+    }
+
+    /// The camera.
+    #[must_use]
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    /// The viewport.
+    #[must_use]
+    pub fn viewport(&self) -> Viewport {
+        self.viewport
+    }
+
+    /// The eye/clip/screen transform.
+    #[must_use]
+    pub fn transform(&self) -> &ViewTransform {
+        &self.transform
+    }
+
+    /// The options it was prepared with.
+    #[must_use]
+    pub fn options(&self) -> &PrepareOptions {
+        &self.options
+    }
+
+    /// Per-stage counts and times.
+    #[must_use]
+    pub fn stats(&self) -> &PipelineStats {
+        &self.stats
+    }
+
+    /// All vertices (shared transformed ones first, then those made by clipping).
+    #[must_use]
+    pub fn vertices(&self) -> &[ViewVertex] {
+        &self.vertices
+    }
+
+    /// Number of polygons.
+    #[must_use]
+    pub fn polygon_count(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// Polygon `i`.
+    #[inline]
+    #[must_use]
+    pub fn polygon(&self, i: usize) -> ViewPolygon<'_> {
+        let (s, e) = (self.starts[i] as usize, self.starts[i + 1] as usize);
+        ViewPolygon {
+            face: self.faces[i],
+            object: self.objects[i],
+            indices: &self.indices[s..e],
+            vertices: &self.vertices,
+        }
+    }
+
+    /// All polygons, in scene order (ascending face ids).
+    pub fn polygons(&self) -> impl ExactSizeIterator<Item = ViewPolygon<'_>> + '_ {
+        (0..self.polygon_count()).map(move |i| self.polygon(i))
+    }
+
+    /// The flat arrays: `starts` (polygon count + 1), `indices`, `faces`.
+    #[must_use]
+    pub fn polygon_arrays(&self) -> (&[u32], &[u32], &[u32]) {
+        (&self.starts, &self.indices, &self.faces)
+    }
+}
+
+/// Runs the front end of the pipeline. An empty scene gives an empty view.
+///
+/// ```
+/// use obscura::{scene::{demo, Viewport}, view::{prepare, PrepareOptions}};
+/// let scene = demo::cube();
+/// let vp = Viewport::new(64, 48).unwrap();
+/// let cam = scene.default_camera(vp.aspect());
+/// let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+/// assert_eq!(view.polygon_count(), 3); // a closed cube seen from a corner shows 3 faces
+/// ```
+pub fn prepare<'s>(
+    scene: &'s Scene,
+    camera: &Camera,
+    viewport: Viewport,
+    options: &PrepareOptions,
+) -> Result<PreparedView<'s>> {
+    camera.validate()?;
+    let t = ViewTransform::new(camera, viewport);
+    let mut stats = PipelineStats::default();
+
+    // Objects: frustum culling by bounding sphere, then box.
+    let start = Instant::now();
+    let planes = frustum_planes(&t.view_projection);
+    let mut visible: Vec<(usize, bool)> = Vec::with_capacity(scene.objects().len());
+    for (k, o) in scene.objects().iter().enumerate() {
+        if o.mesh.polygon_count() == 0 {
+            continue;
+        }
+        if !options.frustum_cull_objects {
+            visible.push((k, false));
+            continue;
+        }
+        let c = match classify_sphere(&planes, &o.sphere) {
+            Containment::Outside => Containment::Outside,
+            _ => classify_aabb(&t.view_projection, &o.bounds),
+        };
+        match c {
+            Containment::Outside => {}
+            Containment::Inside => visible.push((k, true)),
+            Containment::Intersecting => visible.push((k, false)),
+        }
+    }
+    stats.push(
+        "objects: frustum (sphere, box)",
+        "objects",
+        scene.objects().len() as u64,
+        visible.len() as u64,
+        start,
+    );
+
+    // Vertices: world -> eye -> clip, outcodes, screen positions.
+    let start = Instant::now();
+    let vertex_total: usize = visible
+        .iter()
+        .map(|&(k, _)| scene.objects()[k].mesh.positions().len())
+        .sum();
+    let mut vertices: Vec<ViewVertex> = Vec::with_capacity(vertex_total);
+    let mut clip: Vec<DVec4> = Vec::with_capacity(vertex_total);
+    let mut codes: Vec<u8> = Vec::with_capacity(vertex_total);
+    let mut bases: Vec<u32> = Vec::with_capacity(visible.len());
+    for &(k, _) in &visible {
+        let o = &scene.objects()[k];
+        bases.push(vertices.len() as u32);
+        let model_view = t.view * o.transform;
+        for &p in o.mesh.positions() {
+            let eye = model_view.transform_point3(p);
+            let c = t.eye_to_clip(eye);
+            let code = outcode_homogeneous(c);
+            let v = if code == 0 {
+                t.to_screen(c, eye)
+            } else {
+                ViewVertex {
+                    x: f64::NAN,
+                    y: f64::NAN,
+                    zq: f64::NAN,
+                    eye,
+                }
+            };
+            vertices.push(v);
+            clip.push(c);
+            codes.push(code);
+        }
+    }
+    stats.push(
+        "vertices: world -> eye -> clip",
+        "vertices",
+        vertex_total as u64,
+        vertex_total as u64,
+        start,
+    );
+
+    // Back faces, then trivial rejection by outcodes.
+    let start = Instant::now();
+    let face_total: usize = visible
+        .iter()
+        .map(|&(k, _)| scene.objects()[k].mesh.polygon_count())
+        .sum();
+    let mut front: Vec<(u32, u32)> = Vec::with_capacity(face_total);
+    let mut eye_pts: Vec<DVec3> = Vec::new();
+    for (slot, &(k, _)) in visible.iter().enumerate() {
+        let o = &scene.objects()[k];
+        let base = bases[slot] as usize;
+        let cull = options.backface.applies_to(o.closed);
+        for p in 0..o.mesh.polygon_count() {
+            if cull {
+                let poly = o.mesh.polygon(p);
+                let normal = if poly.len() == 3 {
+                    let (a, b, c) = (
+                        vertices[base + poly[0] as usize].eye,
+                        vertices[base + poly[1] as usize].eye,
+                        vertices[base + poly[2] as usize].eye,
+                    );
+                    (b - a).cross(c - a)
+                } else {
+                    eye_pts.clear();
+                    eye_pts.extend(poly.iter().map(|&i| vertices[base + i as usize].eye));
+                    newell_normal(&eye_pts)
+                };
+                let normal = if o.mirrored { -normal } else { normal };
+                if t.is_back_facing_eye(normal, vertices[base + poly[0] as usize].eye) {
+                    continue;
+                }
+            }
+            front.push((slot as u32, p as u32));
+        }
+    }
+    stats.push(
+        "faces: back-face culling",
+        "faces",
+        face_total as u64,
+        front.len() as u64,
+        start,
+    );
+
+    let start = Instant::now();
+    let mut kept: Vec<(u32, u32, u8)> = Vec::with_capacity(front.len());
+    for &(slot, p) in &front {
+        let (k, inside) = visible[slot as usize];
+        let base = bases[slot as usize] as usize;
+        if inside {
+            kept.push((slot, p, 0));
+            continue;
+        }
+        let (mut and, mut or) = (0x3f, 0);
+        for &i in scene.objects()[k].mesh.polygon(p as usize) {
+            let c = codes[base + i as usize];
+            and &= c;
+            or |= c;
+        }
+        if and == 0 {
+            kept.push((slot, p, or));
+        }
+    }
+    stats.push(
+        "faces: frustum (outcodes)",
+        "faces",
+        front.len() as u64,
+        kept.len() as u64,
+        start,
+    );
+
+    // Clip faces that cross a plane; emit polygons.
+    let start = Instant::now();
+    let mut starts: Vec<u32> = Vec::with_capacity(kept.len() + 1);
+    let mut indices: Vec<u32> = Vec::with_capacity(kept.len() * 3);
+    let mut faces: Vec<u32> = Vec::with_capacity(kept.len());
+    let mut objects: Vec<u32> = Vec::with_capacity(kept.len());
+    starts.push(0);
+    let (mut to_clip, mut clipped_out) = (0u64, 0u64);
+    let (mut input, mut out, mut scratch): (
+        Vec<ClipEyeVertex>,
+        Vec<ClipEyeVertex>,
+        Vec<ClipEyeVertex>,
+    ) = (Vec::new(), Vec::new(), Vec::new());
+    for &(slot, p, or) in &kept {
+        let (k, _) = visible[slot as usize];
+        let o = &scene.objects()[k];
+        let base = bases[slot as usize];
+        let poly = o.mesh.polygon(p as usize);
+        if or == 0 {
+            indices.extend(poly.iter().map(|&i| base + i));
+        } else {
+            to_clip += 1;
+            input.clear();
+            input.extend(poly.iter().map(|&i| {
+                let g = (base + i) as usize;
+                ClipEyeVertex {
+                    clip: clip[g],
+                    eye: vertices[g].eye,
+                }
+            }));
+            clip_polygon_homogeneous_masked(&input, or, &mut out, &mut scratch);
+            if out.is_empty() {
+                continue;
+            }
+            clipped_out += 1;
+            for v in &out {
+                indices.push(vertices.len() as u32);
+                vertices.push(t.to_screen(v.clip, v.eye));
+            }
+        }
+        starts.push(indices.len() as u32);
+        faces.push(o.first_face + o.mesh.polygon_face(p as usize));
+        objects.push(k as u32);
+    }
+    stats.push(
+        "faces: clip (Sutherland-Hodgman, homogeneous)",
+        "faces",
+        to_clip,
+        clipped_out,
+        start,
+    );
+
+    Ok(PreparedView {
+        scene,
+        camera: *camera,
+        viewport,
+        transform: t,
+        options: *options,
+        vertices,
+        starts,
+        indices,
+        faces,
+        objects,
+        stats,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::demo;
+
+    #[test]
+    fn cube_from_the_front_shows_one_face_filling_the_expected_square() {
+        let scene = demo::cube();
+        let vp = Viewport::new(100, 100).unwrap();
+        // Unit cube, eye at z = 2.5: the front face (z = 0.5) is at depth 2, and with a
+        // 90 degree fov it spans +-0.5/2 of the half-width 1: pixels 37.5 .. 62.5.
+        let cam = Camera::perspective(
+            DVec3::new(0., 0., 2.5),
+            DVec3::ZERO,
+            DVec3::Y,
+            90.0,
+            0.1,
+            10.0,
+        );
+        let v = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+        assert_eq!(v.polygon_count(), 1);
+        let p = v.polygon(0);
+        assert_eq!(p.face, 5);
+        for vert in p.vertices() {
+            assert!((vert.x - 37.5).abs() < 1e-9 || (vert.x - 62.5).abs() < 1e-9);
+            assert!((vert.depth() - 2.0).abs() < 1e-12);
+            assert!((vert.zq - 0.1 / 2.0).abs() < 1e-15);
+        }
+        let stats = &v.stats().stages;
+        assert_eq!(stats[2].input, 6);
+        assert_eq!(stats[2].output, 1);
+    }
+
+    #[test]
+    fn faces_crossing_the_eye_plane_are_clipped_at_near() {
+        // A big floor under the eye extends behind it: clipping must keep only w > 0.
+        let mut s = Scene::new();
+        s.add(crate::scene::ObjectDesc::new(
+            "floor",
+            demo::grid_mesh(100.0, 100.0, 1, 1),
+        ))
+        .unwrap();
+        let cam = Camera::perspective(
+            DVec3::new(0., 1., 0.),
+            DVec3::new(0., 1., -1.),
+            DVec3::Y,
+            60.0,
+            0.1,
+            1000.0,
+        );
+        let v = prepare(
+            &s,
+            &cam,
+            Viewport::new(64, 64).unwrap(),
+            &PrepareOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(v.polygon_count(), 1);
+        for vert in v.polygon(0).vertices() {
+            assert!(vert.depth() >= 0.1 - 1e-9);
+            assert!(vert.x.is_finite() && vert.y.is_finite());
+            assert!(
+                vert.x >= -1e-9
+                    && vert.x <= 64.0 + 1e-9
+                    && vert.y >= 32.0 - 1e-9
+                    && vert.y <= 64.0 + 1e-9
+            );
+        }
+    }
+
+    #[test]
+    fn empty_scene_gives_empty_view() {
+        let s = Scene::new();
+        let cam = Camera::perspective(DVec3::Z, DVec3::ZERO, DVec3::Y, 60.0, 0.1, 10.0);
+        let v = prepare(
+            &s,
+            &cam,
+            Viewport::new(8, 8).unwrap(),
+            &PrepareOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(v.polygon_count(), 0);
+    }
+}
