@@ -4,11 +4,13 @@
 //! | --- | --- | --- |
 //! | outcodes of the view volume (6 bits, seed's bit order) | [`outcode_homogeneous`] | 000 |
 //! | Sutherland-Hodgman 3D, homogeneous, six chained stages | [`sutherland_hodgman::clip_polygon_homogeneous`] | 000 |
+//! | split a convex polygon by a plane into front and back pieces | [`split::split_polygon`] | 000 (BSP) |
 //!
 //! Clip space is OpenGL's: the view volume is `-w <= x, y, z <= w`. Clipping happens
 //! before the divide by `w`, which is what makes primitives crossing the eye plane
 //! (`w <= 0`) come out right.
 
+pub mod split;
 pub mod sutherland_hodgman;
 
 use glam::DVec4;
