@@ -226,8 +226,8 @@ pub fn scaled_triangles(n: usize, seed: u64) -> Scene {
 }
 
 /// Cameras around a scene: `count` perspective views from random directions at 1.5 to
-/// 3 bounding radii, the last one close enough that the near plane cuts the scene; and
-/// one orthographic view.
+/// 3 bounding radii, the last one at 1.1 radii with its near plane through the middle of
+/// the bounds (so it cuts the scene); and one orthographic view.
 #[must_use]
 pub fn orbit_cameras(scene: &Scene, count: usize, seed: u64) -> Vec<Camera> {
     let mut rng = SplitMix64(seed);
@@ -238,7 +238,7 @@ pub fn orbit_cameras(scene: &Scene, count: usize, seed: u64) -> Vec<Camera> {
         let dir = unit_vector(&mut rng);
         let close = k + 1 == count;
         let dist = if close {
-            r * 0.8
+            r * 1.1
         } else {
             r * rng.range(1.5, 3.0)
         };
@@ -248,8 +248,9 @@ pub fn orbit_cameras(scene: &Scene, count: usize, seed: u64) -> Vec<Camera> {
         } else {
             DVec3::X
         };
+        // The close camera's near plane passes through the middle of the bounds.
         let near = if close {
-            r * 0.3
+            dist - r * 0.5
         } else {
             (dist - r).max(r * 0.01)
         };
@@ -342,10 +343,10 @@ mod tests {
                 let h: Vec<Option<f64>> = tris.iter().map(|t| height(t, x, y)).collect();
                 for a in 0..3 {
                     for b in 0..3 {
-                        if let (Some(ha), Some(hb)) = (h[a], h[b]) {
-                            if ha > hb {
-                                over[a][b] = true;
-                            }
+                        if let (Some(ha), Some(hb)) = (h[a], h[b])
+                            && ha > hb
+                        {
+                            over[a][b] = true;
                         }
                     }
                 }
