@@ -160,7 +160,7 @@ fn cases() -> Vec<Case> {
                 0.15 * f64::from(k),
                 0.1 * f64::from(k),
                 -0.3 * f64::from(k),
-            )) * DMat4::from_rotation_x(1.5707963267948966 + 0.05 * f64::from(k));
+            )) * DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2 + 0.05 * f64::from(k));
             (solid(demo::grid_mesh(1.5, 1.0, 3, 2), DMat4::IDENTITY), t)
         })
         .collect();
@@ -242,12 +242,11 @@ fn near_tie(view: &PreparedView<'_>, i: u32, j: u32) -> bool {
                 return true;
             }
         }
-        if let Some(cov) = poly.coverage(FillRule::TopLeft, vp.width, vp.height) {
-            if cov.covers(i, j) {
-                if let Some(plane) = poly.depth_plane() {
-                    depths.push(view.transform().depth_of_zq(plane.at(px, py)));
-                }
-            }
+        if let Some(cov) = poly.coverage(FillRule::TopLeft, vp.width, vp.height)
+            && cov.covers(i, j)
+            && let Some(plane) = poly.depth_plane()
+        {
+            depths.push(view.transform().depth_of_zq(plane.at(px, py)));
         }
     }
     depths.sort_by(f64::total_cmp);
