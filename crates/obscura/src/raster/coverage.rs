@@ -115,6 +115,7 @@ impl EdgeFunction {
 
     /// The edge `p -> q` of a polygon whose signed area has sign `area_sign`.
     /// `None` for a zero-length edge.
+    #[inline]
     #[must_use]
     pub fn new(p: (f64, f64), q: (f64, f64), area_sign: f64, fill: FillRule) -> Option<Self> {
         let key = |a: (f64, f64)| (a.1, a.0);
@@ -288,6 +289,7 @@ impl PolygonCoverage {
 }
 
 /// The pixels whose centres lie in `[minx, maxx] x [miny, maxy]`, clipped to the image.
+#[inline]
 #[must_use]
 pub fn sample_rect(
     minx: f64,

@@ -25,6 +25,7 @@ pub struct DepthPlane {
 impl DepthPlane {
     /// The plane through polygon vertices `(x, y, zq)`, using the fan triangle of
     /// largest area for accuracy. `None` if the polygon has zero screen area.
+    #[inline]
     #[must_use]
     pub fn from_points(points: &[(f64, f64, f64)]) -> Option<Self> {
         let n = points.len();

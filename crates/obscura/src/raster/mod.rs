@@ -8,6 +8,12 @@
 
 mod coverage;
 mod depth_plane;
+pub mod depth_span;
+pub mod kernel;
+mod setup;
+#[cfg(target_arch = "x86_64")]
+pub mod simd;
 
 pub use coverage::{EdgeFunction, FillRule, PixelRect, PolygonCoverage};
 pub use depth_plane::DepthPlane;
+pub use setup::{NARROW_EDGES, NARROW_WIDTH, NarrowEdges, PolygonSetup};

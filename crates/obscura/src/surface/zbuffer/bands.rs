@@ -1,0 +1,133 @@
+//! Bands of rows as units of work: polygons are binned by the rows they span, then
+//! each band draws its polygons, in ascending order, into its own rows of the frame.
+//!
+//! A pixel belongs to one band, and its band meets the polygons covering it in the
+//! same order as the single-threaded loop: the frame is identical whatever the number
+//! of bands or threads. A band of 64 rows of a 1920-pixel frame (keys and ids, 1 MB)
+//! stays in the core's L2 cache while its polygons are drawn.
+
+use crate::Frame;
+use crate::raster::FillRule;
+use crate::view::PreparedView;
+
+use super::Counts;
+use super::fast::{Band, Kernel, draw_band, keys_to_depths_rows};
+
+/// Rows per band.
+pub(super) const BAND_ROWS: u32 = 64;
+
+/// Threads available to the z-buffer: rayon's current pool with the `parallel`
+/// feature, else 1.
+pub(super) fn thread_count() -> usize {
+    #[cfg(feature = "parallel")]
+    {
+        rayon::current_num_threads()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        1
+    }
+}
+
+/// The bands `[b0, b1)` whose rows hold the samples of a polygon with vertices between
+/// rows `miny` and `maxy`, the same rows `sample_rect` finds; `None` when there are none.
+#[inline]
+fn band_range(miny: f64, maxy: f64, height: u32) -> Option<(u32, u32)> {
+    if !(miny.is_finite() && maxy.is_finite()) {
+        return None;
+    }
+    let h = f64::from(height);
+    let y0 = (miny - 0.5).ceil().clamp(0.0, h) as u32;
+    let y1 = ((maxy - 0.5).floor() + 1.0).clamp(0.0, h) as u32;
+    (y0 < y1).then(|| (y0 / BAND_ROWS, (y1 - 1) / BAND_ROWS + 1))
+}
+
+/// Per band, the polygons of `range` that may cover a sample in it, ascending.
+fn bin(view: &PreparedView<'_>, range: std::ops::Range<usize>, bands: usize) -> Vec<Vec<u32>> {
+    let (starts, indices, _) = view.polygon_arrays();
+    let vertices = view.vertices();
+    let height = view.viewport().height;
+    let mut lists = vec![Vec::new(); bands];
+    for p in range {
+        let (s, e) = (starts[p] as usize, starts[p + 1] as usize);
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for &i in &indices[s..e] {
+            let y = vertices[i as usize].y;
+            lo = lo.min(y);
+            hi = hi.max(y);
+        }
+        if let Some((b0, b1)) = band_range(lo, hi, height) {
+            for list in &mut lists[b0 as usize..b1 as usize] {
+                list.push(p as u32);
+            }
+        }
+    }
+    lists
+}
+
+/// Draws the view into the frame band by band on `threads` threads, then converts the
+/// keys to depths band by band while they are in cache.
+pub(super) fn draw_parallel(
+    view: &PreparedView<'_>,
+    fill: FillRule,
+    kernel: Kernel,
+    threads: usize,
+    frame: &mut Frame,
+) -> Counts {
+    let (width, height) = (frame.width, frame.height);
+    let bands = height.div_ceil(BAND_ROWS) as usize;
+    let n = view.polygon_count();
+    let chunks = threads.max(1);
+    let per = n.div_ceil(chunks).max(1);
+    let ranges: Vec<std::ops::Range<usize>> =
+        (0..n).step_by(per).map(|s| s..(s + per).min(n)).collect();
+    let t = *view.transform();
+    let rows = BAND_ROWS as usize * width as usize;
+    let draw = |b: usize, keys: &mut [f32], ids: &mut [u32], lists: &[Vec<Vec<u32>>]| {
+        let y0 = b as u32 * BAND_ROWS;
+        let mut band = Band {
+            y0,
+            y1: (y0 + BAND_ROWS).min(height),
+            width,
+            height,
+            keys,
+            ids,
+        };
+        let polys = lists.iter().flat_map(|l| l[b].iter().map(|&p| p as usize));
+        let c = draw_band(view, polys, fill, kernel, &mut band);
+        keys_to_depths_rows(&t, kernel, band.keys, band.ids);
+        c
+    };
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        let lists: Vec<Vec<Vec<u32>>> = ranges
+            .into_par_iter()
+            .map(|r| bin(view, r, bands))
+            .collect();
+        frame
+            .depth
+            .par_chunks_mut(rows)
+            .zip(frame.ids.par_chunks_mut(rows))
+            .enumerate()
+            .map(|(b, (keys, ids))| draw(b, keys, ids, &lists))
+            .reduce(Counts::default, |mut a, b| {
+                a.add(b);
+                a
+            })
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        let lists: Vec<Vec<Vec<u32>>> = ranges.into_iter().map(|r| bin(view, r, bands)).collect();
+        let mut total = Counts::default();
+        for (b, (keys, ids)) in frame
+            .depth
+            .chunks_mut(rows)
+            .zip(frame.ids.chunks_mut(rows))
+            .enumerate()
+        {
+            total.add(draw(b, keys, ids, &lists));
+        }
+        total
+    }
+}

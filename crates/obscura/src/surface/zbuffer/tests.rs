@@ -1,0 +1,189 @@
+use glam::DVec3;
+
+use super::*;
+use crate::cull::backface::BackfaceMode;
+use crate::raster::FillRule;
+use crate::scene::demo::{self, SplitMix64};
+use crate::scene::random::{
+    coplanar_grid, interpenetrating_quads, long_thin_triangles, orbit_cameras, random_triangles,
+};
+use crate::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport};
+use crate::view::{PrepareOptions, prepare};
+
+#[test]
+fn seed_004_task_picture() {
+    let scene = demo::seed_task();
+    let vp = Viewport::new(32, 32).unwrap();
+    let view = prepare(
+        &scene,
+        scene.camera().unwrap(),
+        vp,
+        &PrepareOptions::default(),
+    )
+    .unwrap();
+    let opts = RenderOptions {
+        fill_rule: FillRule::Inclusive,
+        ..RenderOptions::default()
+    };
+    for (frame, _) in [
+        render(&view, &opts).unwrap(),
+        render_reference(&view, &opts).unwrap(),
+    ] {
+        let ones = frame.ids.iter().filter(|&&i| i == 0).count();
+        let twos = frame.ids.iter().filter(|&&i| i == 1).count();
+        assert_eq!((ones, twos), (308, 58));
+    }
+}
+
+/// Convex planar n-gons (3 to 40 vertices) of all sizes in random planes.
+fn random_ngons(n: usize, seed: u64) -> Scene {
+    let mut rng = SplitMix64(seed);
+    let mut b = MeshBuilder::new();
+    for k in 0..n {
+        let c = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        let size = [0.002, 0.02, 0.2, 1.5][k % 4] * rng.range(0.5, 1.0);
+        let u = DVec3::new(rng.range(-1., 1.), rng.range(-1., 1.), rng.range(-1., 1.));
+        let v = DVec3::new(rng.range(-1., 1.), rng.range(-1., 1.), rng.range(-1., 1.));
+        let (u, v) = (u.normalize(), u.cross(v).normalize());
+        // Mostly 3 to 9 vertices; one in ten with 17 to 40 (beyond the fixed setups).
+        let count = if k % 10 == 9 { 17 + k % 24 } else { 3 + k % 7 };
+        let mut angles: Vec<f64> = (0..count)
+            .map(|_| rng.range(0.0, std::f64::consts::TAU))
+            .collect();
+        angles.sort_by(f64::total_cmp);
+        let base = b.vertex_count() as u32;
+        for a in &angles {
+            b.push_position(c + (u * a.cos() + v * a.sin()) * size);
+        }
+        let idx: Vec<u32> = (base..base + count as u32).collect();
+        b.push_face(&idx, None).unwrap();
+    }
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("ngons", b.finish().0).with_closed(false))
+        .unwrap();
+    s
+}
+
+fn scenes() -> Vec<(&'static str, Scene)> {
+    vec![
+        ("small triangles", random_triangles(400, 1, 1.0, 0.03)),
+        ("sub-pixel triangles", random_triangles(600, 2, 1.0, 0.002)),
+        ("mixed triangles", random_triangles(150, 3, 1.0, 0.4)),
+        ("huge triangles", random_triangles(12, 4, 0.3, 3.0)),
+        ("slivers", long_thin_triangles(60, 5, 1.0)),
+        ("interpenetrating quads", interpenetrating_quads(20, 6, 1.0)),
+        ("coplanar grid", coplanar_grid(12, 9, 7)),
+        ("n-gons", random_ngons(200, 8)),
+        ("default demo", demo::default_scene()),
+        ("city", demo::city(6, 5, 9)),
+    ]
+}
+
+fn assert_same(a: &(Frame, Stats), b: &(Frame, Stats), what: &str) {
+    assert_eq!(a.0.differences(&b.0), Vec::new(), "{what}: ids differ");
+    let bits = |f: &Frame| f.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+    assert!(bits(&a.0) == bits(&b.0), "{what}: depths differ");
+    assert_eq!(a.1, b.1, "{what}: stats differ");
+}
+
+fn kernels() -> Vec<Kernel> {
+    [Kernel::Portable, Kernel::Avx2, Kernel::Avx512]
+        .into_iter()
+        .filter(|k| k.is_available())
+        .collect()
+}
+
+#[test]
+fn fast_path_equals_reference_on_random_scenes() {
+    let mut covered = 0;
+    for (k, (name, scene)) in scenes().into_iter().enumerate() {
+        let mut cams = orbit_cameras(&scene, 2, 100 + k as u64);
+        if let Some(c) = scene.camera() {
+            cams.push(*c);
+        }
+        for (ci, cam) in cams.iter().enumerate() {
+            // Odd sizes, and one tall enough for several bands.
+            let (w, h) = if ci % 2 == 0 { (97, 61) } else { (70, 150) };
+            let vp = Viewport::new(w, h).unwrap();
+            let backface = if k % 2 == 0 {
+                BackfaceMode::Closed
+            } else {
+                BackfaceMode::Off
+            };
+            let view = prepare(
+                &scene,
+                cam,
+                vp,
+                &PrepareOptions::default().with_backface(backface),
+            )
+            .unwrap();
+            for fill in [FillRule::TopLeft, FillRule::Inclusive] {
+                let opts = RenderOptions::default().with_fill_rule(fill);
+                let reference = render_reference(&view, &opts).unwrap();
+                covered += reference.0.covered_pixels();
+                for kernel in kernels() {
+                    for threads in [1, 2, 3] {
+                        let fast = render_with(&view, &opts, kernel, threads).unwrap();
+                        let what =
+                            format!("{name}, camera {ci}, {fill:?}, {kernel:?}, {threads} threads");
+                        assert_same(&fast, &reference, &what);
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        covered > 100_000,
+        "the scenes must show something: {covered}"
+    );
+}
+
+#[test]
+fn long_spans_cross_powers_of_two_of_the_key() {
+    // A floor seen at a grazing angle: along a row the depth key goes through several
+    // binades, so spans are cut into several exact runs.
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new(
+        "floor",
+        demo::grid_mesh(400.0, 400.0, 3, 3),
+    ))
+    .unwrap();
+    let cam = Camera::perspective(
+        DVec3::new(-150.0, 0.5, 0.0),
+        DVec3::new(0.0, 0.0, 150.0),
+        DVec3::Y,
+        80.0,
+        0.05,
+        1000.0,
+    );
+    let vp = Viewport::new(640, 200).unwrap();
+    let view = prepare(&s, &cam, vp, &PrepareOptions::default()).unwrap();
+    let opts = RenderOptions::default();
+    let reference = render_reference(&view, &opts).unwrap();
+    assert!(reference.0.covered_pixels() > 30_000);
+    for kernel in kernels() {
+        for threads in [1, 2] {
+            let fast = render_with(&view, &opts, kernel, threads).unwrap();
+            assert_same(&fast, &reference, &format!("{kernel:?}, {threads}"));
+        }
+    }
+}
+
+#[test]
+fn empty_view_gives_background() {
+    let s = Scene::new();
+    let cam = Camera::perspective(DVec3::Z, DVec3::ZERO, DVec3::Y, 60.0, 0.1, 10.0);
+    let vp = Viewport::new(9, 7).unwrap();
+    let view = prepare(&s, &cam, vp, &PrepareOptions::default()).unwrap();
+    for threads in [1, 2] {
+        let (f, st) =
+            render_with(&view, &RenderOptions::default(), Kernel::detect(), threads).unwrap();
+        assert!(f.ids.iter().all(|&i| i == BACKGROUND));
+        assert!(f.depth.iter().all(|d| *d == f32::INFINITY));
+        assert_eq!(st.get("pixels_tested"), Some(0.0));
+    }
+}
