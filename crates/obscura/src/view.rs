@@ -19,6 +19,8 @@
 //! Vertices inside the view volume are transformed once and shared by the polygons
 //! that use them; only polygons crossing a clip plane get new vertices.
 
+mod passes;
+
 use std::time::Instant;
 
 use glam::{DMat4, DVec3, DVec4};
@@ -29,7 +31,7 @@ use crate::clip::outcode_homogeneous;
 use crate::clip::sutherland_hodgman::{ClipEyeVertex, clip_polygon_homogeneous_masked};
 use crate::cull::backface::BackfaceMode;
 use crate::cull::frustum::{Containment, classify_aabb, classify_sphere, frustum_planes};
-use crate::geom::{Plane, newell_normal};
+use crate::geom::Plane;
 use crate::raster::{DepthPlane, FillRule, PolygonCoverage};
 use crate::scene::{Camera, Projection, Scene, Viewport};
 
@@ -246,6 +248,16 @@ impl PipelineStats {
         });
     }
 
+    fn push_untimed(&mut self, stage: &'static str, unit: &'static str, input: u64, output: u64) {
+        self.stages.push(StageStats {
+            stage,
+            unit,
+            input,
+            output,
+            ms: 0.0,
+        });
+    }
+
     /// Total milliseconds of all stages.
     #[must_use]
     pub fn total_ms(&self) -> f64 {
@@ -429,6 +441,16 @@ impl<'s> PreparedView<'s> {
 /// let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
 /// assert_eq!(view.polygon_count(), 3); // a closed cube seen from a corner shows 3 faces
 /// ```
+///
+/// # Performance
+/// Two passes over the data: one over vertices (transform, outcode, screen position)
+/// and one over faces that culls back faces, rejects by outcodes, clips and emits in
+/// one go, so no intermediate list of faces is built. The face stages keep their own
+/// counts; their time is the fused pass's, reported once (in the back-face stage, whose
+/// name says so). Clip-space coordinates are not stored: the few polygons that cross a
+/// plane recompute them from the eye-space vertices, with the same function, hence the
+/// same bits. With the `parallel` feature and more than one rayon thread both passes
+/// run on chunks in parallel; the output is the same, in the same order.
 pub fn prepare<'s>(
     scene: &'s Scene,
     camera: &Camera,
@@ -438,6 +460,7 @@ pub fn prepare<'s>(
     camera.validate()?;
     let t = ViewTransform::new(camera, viewport);
     let mut stats = PipelineStats::default();
+    let threads = passes::thread_count();
 
     // Objects: frustum culling by bounding sphere, then box.
     let start = Instant::now();
@@ -471,37 +494,14 @@ pub fn prepare<'s>(
 
     // Vertices: world -> eye -> clip, outcodes, screen positions.
     let start = Instant::now();
-    let vertex_total: usize = visible
-        .iter()
-        .map(|&(k, _)| scene.objects()[k].mesh.positions().len())
-        .sum();
-    let mut vertices: Vec<ViewVertex> = Vec::with_capacity(vertex_total);
-    let mut clip: Vec<DVec4> = Vec::with_capacity(vertex_total);
-    let mut codes: Vec<u8> = Vec::with_capacity(vertex_total);
-    let mut bases: Vec<u32> = Vec::with_capacity(visible.len());
+    let mut bases: Vec<u32> = Vec::with_capacity(visible.len() + 1);
+    let mut vertex_total = 0usize;
     for &(k, _) in &visible {
-        let o = &scene.objects()[k];
-        bases.push(vertices.len() as u32);
-        let model_view = t.view * o.transform;
-        for &p in o.mesh.positions() {
-            let eye = model_view.transform_point3(p);
-            let c = t.eye_to_clip(eye);
-            let code = outcode_homogeneous(c);
-            let v = if code == 0 {
-                t.to_screen(c, eye)
-            } else {
-                ViewVertex {
-                    x: f64::NAN,
-                    y: f64::NAN,
-                    zq: f64::NAN,
-                    eye,
-                }
-            };
-            vertices.push(v);
-            clip.push(c);
-            codes.push(code);
-        }
+        bases.push(vertex_total as u32);
+        vertex_total += scene.objects()[k].mesh.positions().len();
     }
+    bases.push(vertex_total as u32);
+    let (mut vertices, codes) = passes::transform_vertices(scene, &visible, &bases, &t, threads);
     stats.push(
         "vertices: world -> eye -> clip",
         "vertices",
@@ -510,126 +510,41 @@ pub fn prepare<'s>(
         start,
     );
 
-    // Back faces, then trivial rejection by outcodes.
+    // Faces: back faces, trivial rejection by outcodes, clipping, in one pass.
     let start = Instant::now();
     let face_total: usize = visible
         .iter()
         .map(|&(k, _)| scene.objects()[k].mesh.polygon_count())
         .sum();
-    let mut front: Vec<(u32, u32)> = Vec::with_capacity(face_total);
-    let mut eye_pts: Vec<DVec3> = Vec::new();
-    for (slot, &(k, _)) in visible.iter().enumerate() {
-        let o = &scene.objects()[k];
-        let base = bases[slot] as usize;
-        let cull = options.backface.applies_to(o.closed);
-        for p in 0..o.mesh.polygon_count() {
-            if cull {
-                let poly = o.mesh.polygon(p);
-                let normal = if poly.len() == 3 {
-                    let (a, b, c) = (
-                        vertices[base + poly[0] as usize].eye,
-                        vertices[base + poly[1] as usize].eye,
-                        vertices[base + poly[2] as usize].eye,
-                    );
-                    (b - a).cross(c - a)
-                } else {
-                    eye_pts.clear();
-                    eye_pts.extend(poly.iter().map(|&i| vertices[base + i as usize].eye));
-                    newell_normal(&eye_pts)
-                };
-                let normal = if o.mirrored { -normal } else { normal };
-                if t.is_back_facing_eye(normal, vertices[base + poly[0] as usize].eye) {
-                    continue;
-                }
-            }
-            front.push((slot as u32, p as u32));
-        }
-    }
+    let ctx = passes::FaceContext {
+        scene,
+        visible: &visible,
+        bases: &bases,
+        vertices: &vertices,
+        codes: &codes,
+        t: &t,
+        backface: options.backface,
+    };
+    let out = passes::process_faces(&ctx, face_total, threads);
+    vertices.extend_from_slice(&out.clipped_vertices);
     stats.push(
-        "faces: back-face culling",
+        "faces: back-face culling (fused pass: time of the three face stages)",
         "faces",
         face_total as u64,
-        front.len() as u64,
+        out.front,
         start,
     );
-
-    let start = Instant::now();
-    let mut kept: Vec<(u32, u32, u8)> = Vec::with_capacity(front.len());
-    for &(slot, p) in &front {
-        let (k, inside) = visible[slot as usize];
-        let base = bases[slot as usize] as usize;
-        if inside {
-            kept.push((slot, p, 0));
-            continue;
-        }
-        let (mut and, mut or) = (0x3f, 0);
-        for &i in scene.objects()[k].mesh.polygon(p as usize) {
-            let c = codes[base + i as usize];
-            and &= c;
-            or |= c;
-        }
-        if and == 0 {
-            kept.push((slot, p, or));
-        }
-    }
-    stats.push(
-        "faces: frustum (outcodes)",
+    stats.push_untimed(
+        "faces: frustum (outcodes) (timed in the back-face stage)",
         "faces",
-        front.len() as u64,
-        kept.len() as u64,
-        start,
+        out.front,
+        out.kept,
     );
-
-    // Clip faces that cross a plane; emit polygons.
-    let start = Instant::now();
-    let mut starts: Vec<u32> = Vec::with_capacity(kept.len() + 1);
-    let mut indices: Vec<u32> = Vec::with_capacity(kept.len() * 3);
-    let mut faces: Vec<u32> = Vec::with_capacity(kept.len());
-    let mut objects: Vec<u32> = Vec::with_capacity(kept.len());
-    starts.push(0);
-    let (mut to_clip, mut clipped_out) = (0u64, 0u64);
-    let (mut input, mut out, mut scratch): (
-        Vec<ClipEyeVertex>,
-        Vec<ClipEyeVertex>,
-        Vec<ClipEyeVertex>,
-    ) = (Vec::new(), Vec::new(), Vec::new());
-    for &(slot, p, or) in &kept {
-        let (k, _) = visible[slot as usize];
-        let o = &scene.objects()[k];
-        let base = bases[slot as usize];
-        let poly = o.mesh.polygon(p as usize);
-        if or == 0 {
-            indices.extend(poly.iter().map(|&i| base + i));
-        } else {
-            to_clip += 1;
-            input.clear();
-            input.extend(poly.iter().map(|&i| {
-                let g = (base + i) as usize;
-                ClipEyeVertex {
-                    clip: clip[g],
-                    eye: vertices[g].eye,
-                }
-            }));
-            clip_polygon_homogeneous_masked(&input, or, &mut out, &mut scratch);
-            if out.is_empty() {
-                continue;
-            }
-            clipped_out += 1;
-            for v in &out {
-                indices.push(vertices.len() as u32);
-                vertices.push(t.to_screen(v.clip, v.eye));
-            }
-        }
-        starts.push(indices.len() as u32);
-        faces.push(o.first_face + o.mesh.polygon_face(p as usize));
-        objects.push(k as u32);
-    }
-    stats.push(
-        "faces: clip (Sutherland-Hodgman, homogeneous)",
+    stats.push_untimed(
+        "faces: clip (Sutherland-Hodgman, homogeneous) (timed in the back-face stage)",
         "faces",
-        to_clip,
-        clipped_out,
-        start,
+        out.to_clip,
+        out.clipped,
     );
 
     Ok(PreparedView {
@@ -639,12 +554,238 @@ pub fn prepare<'s>(
         transform: t,
         options: *options,
         vertices,
-        starts,
-        indices,
-        faces,
-        objects,
+        starts: out.starts,
+        indices: out.indices,
+        faces: out.faces,
+        objects: out.objects,
         stats,
     })
+}
+
+#[cfg(test)]
+mod reference {
+    use super::*;
+    use crate::geom::newell_normal;
+
+    /// The front end as first written: one pass per stage, intermediate lists, a clip-space
+    /// copy of every vertex. [`prepare`] must give the same view.
+    pub(super) fn prepare_reference<'s>(
+        scene: &'s Scene,
+        camera: &Camera,
+        viewport: Viewport,
+        options: &PrepareOptions,
+    ) -> Result<PreparedView<'s>> {
+        camera.validate()?;
+        let t = ViewTransform::new(camera, viewport);
+        let mut stats = PipelineStats::default();
+
+        // Objects: frustum culling by bounding sphere, then box.
+        let start = Instant::now();
+        let planes = frustum_planes(&t.view_projection);
+        let mut visible: Vec<(usize, bool)> = Vec::with_capacity(scene.objects().len());
+        for (k, o) in scene.objects().iter().enumerate() {
+            if o.mesh.polygon_count() == 0 {
+                continue;
+            }
+            if !options.frustum_cull_objects {
+                visible.push((k, false));
+                continue;
+            }
+            let c = match classify_sphere(&planes, &o.sphere) {
+                Containment::Outside => Containment::Outside,
+                _ => classify_aabb(&t.view_projection, &o.bounds),
+            };
+            match c {
+                Containment::Outside => {}
+                Containment::Inside => visible.push((k, true)),
+                Containment::Intersecting => visible.push((k, false)),
+            }
+        }
+        stats.push(
+            "objects: frustum (sphere, box)",
+            "objects",
+            scene.objects().len() as u64,
+            visible.len() as u64,
+            start,
+        );
+
+        // Vertices: world -> eye -> clip, outcodes, screen positions.
+        let start = Instant::now();
+        let vertex_total: usize = visible
+            .iter()
+            .map(|&(k, _)| scene.objects()[k].mesh.positions().len())
+            .sum();
+        let mut vertices: Vec<ViewVertex> = Vec::with_capacity(vertex_total);
+        let mut clip: Vec<DVec4> = Vec::with_capacity(vertex_total);
+        let mut codes: Vec<u8> = Vec::with_capacity(vertex_total);
+        let mut bases: Vec<u32> = Vec::with_capacity(visible.len());
+        for &(k, _) in &visible {
+            let o = &scene.objects()[k];
+            bases.push(vertices.len() as u32);
+            let model_view = t.view * o.transform;
+            for &p in o.mesh.positions() {
+                let eye = model_view.transform_point3(p);
+                let c = t.eye_to_clip(eye);
+                let code = outcode_homogeneous(c);
+                let v = if code == 0 {
+                    t.to_screen(c, eye)
+                } else {
+                    ViewVertex {
+                        x: f64::NAN,
+                        y: f64::NAN,
+                        zq: f64::NAN,
+                        eye,
+                    }
+                };
+                vertices.push(v);
+                clip.push(c);
+                codes.push(code);
+            }
+        }
+        stats.push(
+            "vertices: world -> eye -> clip",
+            "vertices",
+            vertex_total as u64,
+            vertex_total as u64,
+            start,
+        );
+
+        // Back faces, then trivial rejection by outcodes.
+        let start = Instant::now();
+        let face_total: usize = visible
+            .iter()
+            .map(|&(k, _)| scene.objects()[k].mesh.polygon_count())
+            .sum();
+        let mut front: Vec<(u32, u32)> = Vec::with_capacity(face_total);
+        let mut eye_pts: Vec<DVec3> = Vec::new();
+        for (slot, &(k, _)) in visible.iter().enumerate() {
+            let o = &scene.objects()[k];
+            let base = bases[slot] as usize;
+            let cull = options.backface.applies_to(o.closed);
+            for p in 0..o.mesh.polygon_count() {
+                if cull {
+                    let poly = o.mesh.polygon(p);
+                    let normal = if poly.len() == 3 {
+                        let (a, b, c) = (
+                            vertices[base + poly[0] as usize].eye,
+                            vertices[base + poly[1] as usize].eye,
+                            vertices[base + poly[2] as usize].eye,
+                        );
+                        (b - a).cross(c - a)
+                    } else {
+                        eye_pts.clear();
+                        eye_pts.extend(poly.iter().map(|&i| vertices[base + i as usize].eye));
+                        newell_normal(&eye_pts)
+                    };
+                    let normal = if o.mirrored { -normal } else { normal };
+                    if t.is_back_facing_eye(normal, vertices[base + poly[0] as usize].eye) {
+                        continue;
+                    }
+                }
+                front.push((slot as u32, p as u32));
+            }
+        }
+        stats.push(
+            "faces: back-face culling",
+            "faces",
+            face_total as u64,
+            front.len() as u64,
+            start,
+        );
+
+        let start = Instant::now();
+        let mut kept: Vec<(u32, u32, u8)> = Vec::with_capacity(front.len());
+        for &(slot, p) in &front {
+            let (k, inside) = visible[slot as usize];
+            let base = bases[slot as usize] as usize;
+            if inside {
+                kept.push((slot, p, 0));
+                continue;
+            }
+            let (mut and, mut or) = (0x3f, 0);
+            for &i in scene.objects()[k].mesh.polygon(p as usize) {
+                let c = codes[base + i as usize];
+                and &= c;
+                or |= c;
+            }
+            if and == 0 {
+                kept.push((slot, p, or));
+            }
+        }
+        stats.push(
+            "faces: frustum (outcodes)",
+            "faces",
+            front.len() as u64,
+            kept.len() as u64,
+            start,
+        );
+
+        // Clip faces that cross a plane; emit polygons.
+        let start = Instant::now();
+        let mut starts: Vec<u32> = Vec::with_capacity(kept.len() + 1);
+        let mut indices: Vec<u32> = Vec::with_capacity(kept.len() * 3);
+        let mut faces: Vec<u32> = Vec::with_capacity(kept.len());
+        let mut objects: Vec<u32> = Vec::with_capacity(kept.len());
+        starts.push(0);
+        let (mut to_clip, mut clipped_out) = (0u64, 0u64);
+        let (mut input, mut out, mut scratch): (
+            Vec<ClipEyeVertex>,
+            Vec<ClipEyeVertex>,
+            Vec<ClipEyeVertex>,
+        ) = (Vec::new(), Vec::new(), Vec::new());
+        for &(slot, p, or) in &kept {
+            let (k, _) = visible[slot as usize];
+            let o = &scene.objects()[k];
+            let base = bases[slot as usize];
+            let poly = o.mesh.polygon(p as usize);
+            if or == 0 {
+                indices.extend(poly.iter().map(|&i| base + i));
+            } else {
+                to_clip += 1;
+                input.clear();
+                input.extend(poly.iter().map(|&i| {
+                    let g = (base + i) as usize;
+                    ClipEyeVertex {
+                        clip: clip[g],
+                        eye: vertices[g].eye,
+                    }
+                }));
+                clip_polygon_homogeneous_masked(&input, or, &mut out, &mut scratch);
+                if out.is_empty() {
+                    continue;
+                }
+                clipped_out += 1;
+                for v in &out {
+                    indices.push(vertices.len() as u32);
+                    vertices.push(t.to_screen(v.clip, v.eye));
+                }
+            }
+            starts.push(indices.len() as u32);
+            faces.push(o.first_face + o.mesh.polygon_face(p as usize));
+            objects.push(k as u32);
+        }
+        stats.push(
+            "faces: clip (Sutherland-Hodgman, homogeneous)",
+            "faces",
+            to_clip,
+            clipped_out,
+            start,
+        );
+
+        Ok(PreparedView {
+            scene,
+            camera: *camera,
+            viewport,
+            transform: t,
+            options: *options,
+            vertices,
+            starts,
+            indices,
+            faces,
+            objects,
+            stats,
+        })
+    }
 }
 
 #[cfg(test)]
@@ -715,6 +856,70 @@ mod tests {
                     && vert.y <= 64.0 + 1e-9
             );
         }
+    }
+
+    fn same_view(a: &PreparedView<'_>, b: &PreparedView<'_>, what: &str) {
+        let bits = |v: &ViewVertex| [v.x, v.y, v.zq, v.eye.x, v.eye.y, v.eye.z].map(f64::to_bits);
+        assert_eq!(a.vertices.len(), b.vertices.len(), "{what}");
+        assert!(
+            a.vertices
+                .iter()
+                .zip(&b.vertices)
+                .all(|(p, q)| bits(p) == bits(q)),
+            "{what}: vertices differ"
+        );
+        assert_eq!(a.starts, b.starts, "{what}");
+        assert_eq!(a.indices, b.indices, "{what}");
+        assert_eq!(a.faces, b.faces, "{what}");
+        assert_eq!(a.objects, b.objects, "{what}");
+        let counts = |v: &PreparedView<'_>| {
+            v.stats
+                .stages
+                .iter()
+                .map(|s| (s.unit, s.input, s.output))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(counts(a), counts(b), "{what}");
+    }
+
+    #[test]
+    fn fused_passes_equal_the_stage_per_pass_pipeline() {
+        use crate::scene::random::{mirrored, orbit_cameras, random_triangles};
+        // Big enough (more than PARALLEL_MIN faces and vertices) for the parallel passes.
+        let scenes = [
+            ("triangles", random_triangles(25_000, 3, 1.0, 0.05)),
+            ("city", demo::city(60, 60, 4)),
+            ("mirrored city", mirrored(&demo::city(12, 12, 5))),
+            ("sphere", demo::sphere(160, 80)),
+            ("default", demo::default_scene()),
+        ];
+        let mut clipped = 0;
+        for (name, scene) in &scenes {
+            for (ci, cam) in orbit_cameras(scene, 2, 17).iter().enumerate() {
+                let vp = Viewport::new(200, 150).unwrap();
+                for backface in [BackfaceMode::Closed, BackfaceMode::All, BackfaceMode::Off] {
+                    let opts = PrepareOptions::default().with_backface(backface);
+                    let expect = reference::prepare_reference(scene, cam, vp, &opts).unwrap();
+                    clipped += expect.stats.stages[4].output;
+                    for threads in [1, 2, 3] {
+                        #[cfg(feature = "parallel")]
+                        let got = rayon::ThreadPoolBuilder::new()
+                            .num_threads(threads)
+                            .build()
+                            .unwrap()
+                            .install(|| prepare(scene, cam, vp, &opts).unwrap());
+                        #[cfg(not(feature = "parallel"))]
+                        let got = prepare(scene, cam, vp, &opts).unwrap();
+                        same_view(
+                            &got,
+                            &expect,
+                            &format!("{name} camera {ci} {backface:?} {threads}"),
+                        );
+                    }
+                }
+            }
+        }
+        assert!(clipped > 100, "the close cameras must clip: {clipped}");
     }
 
     #[test]

@@ -36,7 +36,7 @@ use super::kernel::RasterKernel;
 
 /// Spans shorter than this are stepped serially: a run costs more to set up than a few
 /// dependent additions.
-pub const SERIAL_SPAN: usize = 12;
+pub const SERIAL_SPAN: usize = 4;
 
 /// The longest run from key `z` with step `d` on which the serial chain is linear,
 /// limited to `max`: returns `(D, m)` with `z_j = z + j D` exactly for `j < m`, where
@@ -46,19 +46,20 @@ pub const SERIAL_SPAN: usize = 12;
 #[must_use]
 pub fn linear_run(z: f64, d: f64, max: usize) -> (f64, usize) {
     let single = (d, max.min(1));
-    if max <= 1 || !z.is_normal() {
+    if max <= 1 {
         return single;
     }
+    // The biased exponent; keys that are zero, subnormal, very small (u would not be
+    // normal), very large (2^(e+1) would overflow), infinite or NaN are served serially.
     let exp = (z.to_bits() >> 52) & 0x7ff;
-    // Keep u normal and 2^(e+1) finite: keys that small or large are served serially.
-    if exp <= 53 || exp >= 2046 {
+    if !(54..=2045).contains(&exp) {
         return single;
     }
     let u = f64::from_bits((exp - 52) << 52);
-    let bottom = f64::from_bits(exp << 52);
-    // d / u is exact (a power-of-two scaling) unless it overflows or underflows; an
-    // underflow gives a tiny r that rounds to 0 just as the exact quotient would.
-    let r = d / u;
+    // 1 / u, also a power of two: d * (1 / u) is the exact d / u unless it overflows or
+    // underflows, and an underflow gives a tiny r that rounds to 0 as d / u would.
+    let inv_u = f64::from_bits((2098 - exp) << 52);
+    let r = d * inv_u;
     if !r.is_finite() {
         return single;
     }
@@ -72,6 +73,7 @@ pub fn linear_run(z: f64, d: f64, max: usize) -> (f64, usize) {
         // |d| < u / 2: fl(z + d) = z, the key never moves.
         return (0.0, max);
     }
+    let bottom = f64::from_bits(exp << 52);
     let (lo, hi) = if z > 0.0 {
         (bottom + u, 2.0 * bottom - u)
     } else {
@@ -80,6 +82,16 @@ pub fn linear_run(z: f64, d: f64, max: usize) -> (f64, usize) {
     if !(lo <= z && z <= hi) {
         return single;
     }
+    // The end point, evaluated exactly when it is inside [lo, hi] (and outside it when
+    // it is not: the computation is monotonic and lo, hi are doubles), decides; a
+    // monotonic sequence between two points of the interval stays in it.
+    let inside = |m: usize| {
+        let last = z + (m - 1) as f64 * step;
+        lo <= last && last <= hi
+    };
+    if inside(max) {
+        return (step, max);
+    }
     let room = if step > 0.0 { hi - z } else { lo - z };
     let fits = (room / step).floor();
     let mut m = if fits >= (max - 1) as f64 {
@@ -87,12 +99,8 @@ pub fn linear_run(z: f64, d: f64, max: usize) -> (f64, usize) {
     } else {
         fits as usize + 1
     };
-    // The quotient may be one off; the end point, evaluated exactly when inside, decides.
-    while m > 1 {
-        let last = z + (m - 1) as f64 * step;
-        if lo <= last && last <= hi {
-            break;
-        }
+    // The quotient may be one off.
+    while m > 1 && !inside(m) {
         m -= 1;
     }
     (step, m)

@@ -16,4 +16,4 @@ pub mod simd;
 
 pub use coverage::{EdgeFunction, FillRule, PixelRect, PolygonCoverage};
 pub use depth_plane::DepthPlane;
-pub use setup::{NARROW_EDGES, NARROW_WIDTH, NarrowEdges, PolygonSetup};
+pub use setup::{NARROW_EDGES, NARROW_WIDTH, NarrowEdges, PolygonSetup, TriangleSetup, row_span};

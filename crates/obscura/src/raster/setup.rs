@@ -187,69 +187,11 @@ impl<const N: usize> PolygonSetup<N> {
     }
 
     /// The covered pixels of row `j` within columns `[x0, x1)`, as a half-open span,
-    /// or `None`. Each edge's test is monotonic along the row (every step of the
-    /// canonical expression is monotonic in `px`), so its inside pixels form an
-    /// interval: a closed-form guess of its end, corrected by the exact test, finds it.
+    /// or `None` (see [`row_span`]).
     #[inline(always)]
     #[must_use]
     pub fn row_span(&self, j: u32, x0: u32, x1: u32) -> Option<(u32, u32)> {
-        let r = self.rect?;
-        if j < r.y0 || j >= r.y1 {
-            return None;
-        }
-        let py = f64::from(j) + 0.5;
-        let (mut lo, mut hi) = (i64::from(r.x0.max(x0)), i64::from(r.x1.min(x1)));
-        if lo >= hi {
-            return None;
-        }
-        for e in self.edges() {
-            let row = e.row_term(py);
-            let slope = -e.sign * e.dy;
-            let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
-            if slope == 0.0 {
-                if !inside(lo) {
-                    return None;
-                }
-                continue;
-            }
-            // Where the edge crosses the row; only a guess, the loops below make it exact.
-            let cross = e.ox + row / e.dy;
-            let guess = if cross.is_finite() {
-                (cross - 0.5).ceil()
-            } else {
-                lo as f64
-            };
-            let g = guess.clamp(lo as f64 - 1.0, hi as f64 + 1.0) as i64;
-            if slope > 0.0 {
-                let mut i = g.clamp(lo, hi);
-                if i < hi && inside(i) {
-                    while i > lo && inside(i - 1) {
-                        i -= 1;
-                    }
-                } else {
-                    while i < hi && !inside(i) {
-                        i += 1;
-                    }
-                }
-                lo = i;
-            } else {
-                let mut i = g.clamp(lo - 1, hi - 1);
-                if i >= lo && inside(i) {
-                    while i + 1 < hi && inside(i + 1) {
-                        i += 1;
-                    }
-                } else {
-                    while i >= lo && !inside(i) {
-                        i -= 1;
-                    }
-                }
-                hi = i + 1;
-            }
-            if lo >= hi {
-                return None;
-            }
-        }
-        Some((lo as u32, hi as u32))
+        row_span(self.edges(), self.rect?, j, x0, x1)
     }
 
     /// The covered pixels of row `j` among the `count <= 64` columns from `x0`, as bit
@@ -287,6 +229,165 @@ impl<const N: usize> PolygonSetup<N> {
     }
 }
 
+/// The pixels of row `j` within columns `[x0, x1)` covered by the convex polygon with
+/// these edges and sample rectangle `r`, as a half-open span, or `None`. Each edge's
+/// test is monotonic along the row (every step of the canonical expression is monotonic
+/// in `px`), so its inside pixels form an interval: a closed-form guess of its end,
+/// corrected by the exact test, finds it.
+#[inline(always)]
+#[must_use]
+pub fn row_span(
+    edges: &[EdgeFunction],
+    r: PixelRect,
+    j: u32,
+    x0: u32,
+    x1: u32,
+) -> Option<(u32, u32)> {
+    if j < r.y0 || j >= r.y1 {
+        return None;
+    }
+    let py = f64::from(j) + 0.5;
+    let (mut lo, mut hi) = (i64::from(r.x0.max(x0)), i64::from(r.x1.min(x1)));
+    if lo >= hi {
+        return None;
+    }
+    for e in edges {
+        let row = e.row_term(py);
+        let slope = -e.sign * e.dy;
+        let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
+        if slope == 0.0 {
+            if !inside(lo) {
+                return None;
+            }
+            continue;
+        }
+        // Where the edge crosses the row; only a guess, the loops below make it exact.
+        let cross = e.ox + row / e.dy;
+        let guess = if cross.is_finite() {
+            (cross - 0.5).ceil()
+        } else {
+            lo as f64
+        };
+        let g = guess.clamp(lo as f64 - 1.0, hi as f64 + 1.0) as i64;
+        if slope > 0.0 {
+            let mut i = g.clamp(lo, hi);
+            if i < hi && inside(i) {
+                while i > lo && inside(i - 1) {
+                    i -= 1;
+                }
+            } else {
+                while i < hi && !inside(i) {
+                    i += 1;
+                }
+            }
+            lo = i;
+        } else {
+            let mut i = g.clamp(lo - 1, hi - 1);
+            if i >= lo && inside(i) {
+                while i + 1 < hi && inside(i + 1) {
+                    i += 1;
+                }
+            } else {
+                while i >= lo && !inside(i) {
+                    i -= 1;
+                }
+            }
+            hi = i + 1;
+        }
+        if lo >= hi {
+            return None;
+        }
+    }
+    Some((lo as u32, hi as u32))
+}
+
+/// A set-up triangle: what [`PolygonSetup<3>`] holds, computed without loops over
+/// vertices or branches on the edge orientation (triangles are most polygons of most
+/// scenes, and their setup is most of the work of drawing small ones).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangleSetup {
+    /// The three edges, as [`PolygonCoverage::edges`](super::PolygonCoverage::edges).
+    pub edges: [EdgeFunction; 3],
+    /// The pixels whose samples lie in its box, clipped to the image.
+    pub rect: PixelRect,
+    /// The depth-key plane, as [`DepthPlane::from_points`].
+    pub plane: DepthPlane,
+}
+
+/// The edge `p -> q` as [`EdgeFunction::new`] makes it, for distinct finite points.
+#[inline(always)]
+fn triangle_edge(p: (f64, f64), q: (f64, f64), area_sign: f64, inclusive: bool) -> EdgeFunction {
+    let less = p.1 < q.1 || (p.1 == q.1 && p.0 < q.0);
+    let (o, e) = if less { (p, q) } else { (q, p) };
+    let sign = if less { area_sign } else { -area_sign };
+    let (dx, dy) = (e.0 - o.0, e.1 - o.1);
+    let (ex, ey) = (dx * sign, dy * sign);
+    let top_left = (ey == 0.0 && ex > 0.0) || ey < 0.0;
+    EdgeFunction {
+        ox: o.0,
+        oy: o.1,
+        dx,
+        dy,
+        sign,
+        include_zero: inclusive || top_left,
+    }
+}
+
+impl TriangleSetup {
+    /// Sets up the triangle `(x, y, zq)` for a `width x height` image; `None` exactly
+    /// when [`PolygonCoverage::new`](super::PolygonCoverage::new) gives `None`.
+    ///
+    /// The edges need no zero-length check: with a non-zero finite area the three
+    /// points are distinct (equal points make both products of the area equal).
+    #[inline(always)]
+    #[must_use]
+    pub fn new(p: [(f64, f64, f64); 3], fill: FillRule, width: u32, height: u32) -> Option<Self> {
+        let [a, b, c] = p;
+        let minx = a.0.min(b.0).min(c.0);
+        let maxx = a.0.max(b.0).max(c.0);
+        let miny = a.1.min(b.1).min(c.1);
+        let maxy = a.1.max(b.1).max(c.1);
+        // sample_rect, with clamp written as max/min (equal for the finite values
+        // that pass its check).
+        if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
+            return None;
+        }
+        let (w, h) = (f64::from(width), f64::from(height));
+        let rect = PixelRect {
+            x0: (minx - 0.5).ceil().max(0.0).min(w) as u32,
+            y0: (miny - 0.5).ceil().max(0.0).min(h) as u32,
+            x1: ((maxx - 0.5).floor() + 1.0).max(0.0).min(w) as u32,
+            y1: ((maxy - 0.5).floor() + 1.0).max(0.0).min(h) as u32,
+        };
+        if rect.is_empty() {
+            return None;
+        }
+        let (ax, ay, az) = (b.0 - a.0, b.1 - a.1, b.2 - a.2);
+        let (bx, by, bz) = (c.0 - a.0, c.1 - a.1, c.2 - a.2);
+        // The area of PolygonCoverage::new and the determinant of DepthPlane::from_points
+        // are the same expression for a triangle.
+        let area2 = ax * by - ay * bx;
+        if !(area2 != 0.0 && area2.is_finite()) {
+            return None;
+        }
+        let area_sign = area2.signum();
+        let inclusive = fill == FillRule::Inclusive;
+        let edges = [
+            triangle_edge((a.0, a.1), (b.0, b.1), area_sign, inclusive),
+            triangle_edge((b.0, b.1), (c.0, c.1), area_sign, inclusive),
+            triangle_edge((c.0, c.1), (a.0, a.1), area_sign, inclusive),
+        ];
+        let plane = DepthPlane {
+            x0: a.0,
+            y0: a.1,
+            z0: a.2,
+            dzdx: (az * by - bz * ay) / area2,
+            dzdy: (ax * bz - bx * az) / area2,
+        };
+        Some(TriangleSetup { edges, rect, plane })
+    }
+}
+
 /// Polygons at most this many pixels wide can use [`NarrowEdges`].
 pub const NARROW_WIDTH: u32 = 8;
 /// Polygons with at most this many edges can use [`NarrowEdges`].
@@ -312,6 +413,8 @@ pub struct NarrowEdges {
     pub(crate) dx: [f64; NARROW_EDGES],
     pub(crate) oy: [f64; NARROW_EDGES],
     pub(crate) count: usize,
+    /// Whether columns 4 to 7 are in use (else only the first four are computed).
+    pub(crate) wide: bool,
     x0: u32,
     lanes: u32,
 }
@@ -325,6 +428,7 @@ impl Default for NarrowEdges {
             dx: [0.0; NARROW_EDGES],
             oy: [0.0; NARROW_EDGES],
             count: 0,
+            wide: false,
             x0: 0,
             lanes: 0,
         }
@@ -343,12 +447,16 @@ impl NarrowEdges {
         self.x0 = r.x0;
         self.lanes = (1u32 << (r.x1 - r.x0)) - 1;
         self.count = edges.len();
+        // Columns beyond the rectangle are never used (masked by `lanes`), so four
+        // suffice for the many polygons at most four pixels wide.
+        self.wide = r.x1 - r.x0 > 4;
+        let used = if self.wide { 8 } else { 4 };
         let mut px = [0.0; 8];
         for (l, p) in px.iter_mut().enumerate() {
             *p = f64::from(r.x0 + l as u32) + 0.5;
         }
         for (k, e) in edges.iter().enumerate() {
-            for (c, &x) in self.columns[k].iter_mut().zip(&px) {
+            for (c, &x) in self.columns[k][..used].iter_mut().zip(&px) {
                 *c = e.sign * (e.dy * (x - e.ox));
             }
             self.threshold[k] = if e.include_zero {
@@ -388,9 +496,10 @@ impl NarrowEdges {
     pub fn row_mask(&self, j: u32) -> u32 {
         let py = f64::from(j) + 0.5;
         let mut inside = [true; 8];
+        let used = if self.wide { 8 } else { 4 };
         for k in 0..self.count {
             let row = self.row(k, py);
-            for (i, &c) in inside.iter_mut().zip(&self.columns[k]) {
+            for (i, &c) in inside[..used].iter_mut().zip(&self.columns[k]) {
                 *i &= row - c > self.threshold[k];
             }
         }
@@ -422,7 +531,7 @@ mod tests {
         angles
             .iter()
             .map(|a| {
-                // Half the vertices on the pixel-centre grid, to exercise ties.
+                // Some vertices on the pixel-centre grid, to exercise ties.
                 let (x, y) = (cx + rx * a.cos(), cy + ry * a.sin());
                 let snap = rng.next_f64() < 0.3;
                 let f = |v: f64| if snap { v.floor() + 0.5 } else { v };
@@ -452,9 +561,16 @@ mod tests {
             let ok = setup.set(&pts, fill, w, h);
             assert_eq!(ok, cov.is_some(), "{pts:?}");
             assert_eq!(tri.set(&pts, fill, w, h), ok && n == 3);
-            if n == 3 && ok {
-                assert_eq!((tri.edges(), tri.rect()), (setup.edges(), setup.rect()));
-                assert_eq!(tri.depth_plane(), setup.depth_plane());
+            if n == 3 {
+                let fast = TriangleSetup::new([pts[0], pts[1], pts[2]], fill, w, h);
+                assert_eq!(fast.is_some(), ok, "{pts:?}");
+                if let Some(fast) = fast {
+                    assert_eq!((tri.edges(), tri.rect()), (setup.edges(), setup.rect()));
+                    assert_eq!(tri.depth_plane(), setup.depth_plane());
+                    assert_eq!(&fast.edges[..], setup.edges());
+                    assert_eq!(fast.rect, setup.rect());
+                    assert_eq!(Some(fast.plane), setup.depth_plane());
+                }
             }
             let Some(cov) = cov else {
                 assert!(setup.rect().is_empty() && setup.row_span(0, 0, w).is_none());
@@ -507,7 +623,15 @@ mod tests {
         assert!(!s.set(&nan, FillRule::TopLeft, 16, 16));
         let two = [(0.0, 0.0, 1.0), (4.0, 4.0, 1.0)];
         assert!(!s.set(&two, FillRule::TopLeft, 16, 16));
+        for t in [
+            line,
+            nan,
+            [(0.0, 0.0, 1.0), (0.0, 0.0, 1.0), (5.0, 1.0, 1.0)],
+        ] {
+            assert!(TriangleSetup::new(t, FillRule::TopLeft, 16, 16).is_none());
+        }
         let huge = [(0.0, 0.0, 1.0), (1e300, 0.0, 1.0), (0.0, 1e300, 1.0)];
+        assert!(TriangleSetup::new(huge, FillRule::TopLeft, 16, 16).is_none());
         assert!(!s.set(&huge, FillRule::TopLeft, 16, 16)); // area overflows
         let square = [
             (1.0, 1.0, 1.0),

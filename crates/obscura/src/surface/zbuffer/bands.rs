@@ -8,6 +8,7 @@
 
 use crate::Frame;
 use crate::raster::FillRule;
+use crate::raster::kernel::DepthTarget;
 use crate::view::PreparedView;
 
 use super::Counts;
@@ -86,16 +87,19 @@ pub(super) fn draw_parallel(
     let draw = |b: usize, keys: &mut [f32], ids: &mut [u32], lists: &[Vec<Vec<u32>>]| {
         let y0 = b as u32 * BAND_ROWS;
         let mut band = Band {
-            y0,
+            target: DepthTarget {
+                keys,
+                ids,
+                width: width as usize,
+                y0,
+            },
             y1: (y0 + BAND_ROWS).min(height),
             width,
             height,
-            keys,
-            ids,
         };
         let polys = lists.iter().flat_map(|l| l[b].iter().map(|&p| p as usize));
         let c = draw_band(view, polys, fill, kernel, &mut band);
-        keys_to_depths_rows(&t, kernel, band.keys, band.ids);
+        keys_to_depths_rows(&t, kernel, band.target.keys, band.target.ids);
         c
     };
     #[cfg(feature = "parallel")]

@@ -6,11 +6,10 @@
 
 use crate::Frame;
 use crate::frame::BACKGROUND;
-use crate::raster::depth_span::depth_test_span;
-use crate::raster::kernel::{Portable, RasterKernel};
+use crate::raster::kernel::{DepthTarget, Portable, RasterKernel, is_narrow};
 #[cfg(target_arch = "x86_64")]
 use crate::raster::simd::Avx2;
-use crate::raster::{DepthPlane, EdgeFunction, FillRule, NarrowEdges, PixelRect, PolygonSetup};
+use crate::raster::{DepthPlane, EdgeFunction, FillRule, PixelRect, PolygonSetup, TriangleSetup};
 use crate::view::{PreparedView, ViewTransform};
 
 use super::Counts;
@@ -60,89 +59,44 @@ impl Kernel {
 
 /// Rows `y0..y1` of a frame: the keys (negated, see the module doc) and ids.
 pub(super) struct Band<'a> {
-    pub y0: u32,
+    pub target: DepthTarget<'a>,
     pub y1: u32,
     pub width: u32,
     pub height: u32,
-    pub keys: &'a mut [f32],
-    pub ids: &'a mut [u32],
-}
-
-/// Depth-tests one span of row `y` and counts it.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn draw_span<K: RasterKernel>(
-    kernel: K,
-    band: &mut Band<'_>,
-    c: &mut Counts,
-    y: u32,
-    x0: u32,
-    x1: u32,
-    plane: &DepthPlane,
-    face: u32,
-) {
-    let z = plane.at(f64::from(x0) + 0.5, f64::from(y) + 0.5);
-    let row = (y - band.y0) as usize * band.width as usize;
-    let (a, b) = (row + x0 as usize, row + x1 as usize);
-    c.written += u64::from(depth_test_span(
-        kernel,
-        &mut band.keys[a..b],
-        &mut band.ids[a..b],
-        z,
-        plane.dzdx,
-        face,
-    ));
-    c.tested += u64::from(x1 - x0);
 }
 
 /// Draws the rows of the band of one set-up polygon: narrow ones by masks of their
-/// columns, wide ones by row spans (`row_span`).
+/// columns, wide ones by row spans.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn draw_polygon<K: RasterKernel>(
     kernel: K,
     band: &mut Band<'_>,
     c: &mut Counts,
-    narrow: &mut NarrowEdges,
     edges: &[EdgeFunction],
     rect: PixelRect,
     plane: Option<DepthPlane>,
     face: u32,
-    row_span: impl Fn(u32) -> Option<(u32, u32)>,
 ) {
     let Some(plane) = plane else {
         return;
     };
+    let y0 = band.target.y0;
     // A polygon spanning several bands is counted by the band of its first row.
-    if rect.y0 >= band.y0 && rect.y0 < band.y1 {
+    if rect.y0 >= y0 && rect.y0 < band.y1 {
         c.drawn += 1;
     }
-    let (ya, yb) = (rect.y0.max(band.y0), rect.y1.min(band.y1));
-    if ya >= yb {
+    let rows = rect.y0.max(y0)..rect.y1.min(band.y1);
+    if rows.is_empty() {
         return;
     }
-    if narrow.set(edges, rect) {
-        let x0 = narrow.x0();
-        for y in ya..yb {
-            let m = kernel.narrow_row_mask(narrow, y);
-            if m == 0 {
-                continue;
-            }
-            let (a, b) = (x0 + m.trailing_zeros(), x0 + 32 - m.leading_zeros());
-            debug_assert_eq!(
-                m.count_ones(),
-                b - a,
-                "covered pixels of a row are contiguous"
-            );
-            draw_span(kernel, band, c, y, a, b, &plane, face);
-        }
+    let s = if is_narrow(edges, rect) {
+        kernel.draw_narrow(edges, rect, rows, &plane, &mut band.target, face)
     } else {
-        for y in ya..yb {
-            if let Some((a, b)) = row_span(y) {
-                draw_span(kernel, band, c, y, a, b, &plane, face);
-            }
-        }
-    }
+        kernel.draw_wide(edges, rect, rows, &plane, &mut band.target, face)
+    };
+    c.tested += s.tested;
+    c.written += s.written;
 }
 
 /// Draws polygons `polygons` (indices into the view, ascending) into the band.
@@ -157,10 +111,8 @@ fn draw_band_impl<K: RasterKernel>(
     let (starts, indices, faces) = view.polygon_arrays();
     let vertices = view.vertices();
     let (width, height) = (band.width, band.height);
-    let mut triangle = PolygonSetup::<3>::new();
     let mut polygon = PolygonSetup::<16>::new();
     let mut points = [(0.0, 0.0, 0.0); 16];
-    let mut narrow = NarrowEdges::default();
     let mut c = Counts::default();
     for p in polygons {
         let (s, e) = (starts[p] as usize, starts[p + 1] as usize);
@@ -170,22 +122,11 @@ fn draw_band_impl<K: RasterKernel>(
             (v.x, v.y, v.zq)
         };
         if let &[a, b, d] = &indices[s..e] {
-            if !triangle.set(&[point(a), point(b), point(d)], fill, width, height) {
+            let Some(t) = TriangleSetup::new([point(a), point(b), point(d)], fill, width, height)
+            else {
                 continue;
-            }
-            let t = &triangle;
-            let rs = |y| t.row_span(y, 0, width);
-            draw_polygon(
-                kernel,
-                band,
-                &mut c,
-                &mut narrow,
-                t.edges(),
-                t.rect(),
-                t.depth_plane(),
-                face,
-                rs,
-            );
+            };
+            draw_polygon(kernel, band, &mut c, &t.edges, t.rect, Some(t.plane), face);
         } else if PolygonSetup::<16>::fits(e - s) {
             let n = e - s;
             for (q, &i) in points.iter_mut().zip(&indices[s..e]) {
@@ -195,17 +136,14 @@ fn draw_band_impl<K: RasterKernel>(
                 continue;
             }
             let t = &polygon;
-            let rs = |y| t.row_span(y, 0, width);
             draw_polygon(
                 kernel,
                 band,
                 &mut c,
-                &mut narrow,
                 t.edges(),
                 t.rect(),
                 t.depth_plane(),
                 face,
-                rs,
             );
         } else {
             // Rare: more than 16 vertices. The shared coverage, with its allocations.
@@ -213,17 +151,14 @@ fn draw_band_impl<K: RasterKernel>(
             let Some(cov) = poly.coverage(fill, width, height) else {
                 continue;
             };
-            let rs = |y| cov.row_span(y);
             draw_polygon(
                 kernel,
                 band,
                 &mut c,
-                &mut narrow,
                 cov.edges(),
                 cov.rect(),
                 poly.depth_plane(),
                 face,
-                rs,
             );
         }
     }
@@ -295,12 +230,15 @@ pub(super) fn draw_all(
     frame: &mut Frame,
 ) -> Counts {
     let mut band = Band {
-        y0: 0,
+        target: DepthTarget {
+            keys: &mut frame.depth,
+            ids: &mut frame.ids,
+            width: frame.width as usize,
+            y0: 0,
+        },
         y1: frame.height,
         width: frame.width,
         height: frame.height,
-        keys: &mut frame.depth,
-        ids: &mut frame.ids,
     };
     draw_band(view, 0..view.polygon_count(), fill, kernel, &mut band)
 }

@@ -1,0 +1,338 @@
+//! The two passes of [`prepare`](super::prepare): vertices (transform, outcode, screen
+//! position) and faces (back-face test, outcode rejection, clipping, emission), each
+//! serial or, with the `parallel` feature and more than one thread, on chunks in
+//! parallel. Both orders of work give the same arrays: chunks are contiguous runs of
+//! vertices or faces, concatenated in order.
+//!
+//! Each decision is computed by the expressions of the stage-per-pass pipeline it
+//! replaced (kept as `prepare_reference` in the tests, which compare the two).
+
+use glam::{DMat4, DVec3};
+
+use super::{ViewTransform, ViewVertex};
+use crate::clip::outcode_homogeneous;
+use crate::clip::sutherland_hodgman::{ClipEyeVertex, clip_polygon_homogeneous_masked};
+use crate::cull::backface::BackfaceMode;
+use crate::geom::newell_normal;
+use crate::scene::Scene;
+
+/// Threads available: rayon's current pool with the `parallel` feature, else 1.
+pub(super) fn thread_count() -> usize {
+    #[cfg(feature = "parallel")]
+    {
+        rayon::current_num_threads()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        1
+    }
+}
+
+/// Below this many vertices or faces a pass runs on one thread: splitting would cost
+/// more than it saves.
+#[cfg(feature = "parallel")]
+const PARALLEL_MIN: usize = 20_000;
+
+/// One vertex: eye position, clip position, outcode, and the screen position when
+/// inside the view volume (NaN otherwise).
+#[inline(always)]
+fn transform_vertex(model_view: &DMat4, t: &ViewTransform, p: DVec3) -> (ViewVertex, u8) {
+    let eye = model_view.transform_point3(p);
+    let c = t.eye_to_clip(eye);
+    let code = outcode_homogeneous(c);
+    let v = if code == 0 {
+        t.to_screen(c, eye)
+    } else {
+        ViewVertex {
+            x: f64::NAN,
+            y: f64::NAN,
+            zq: f64::NAN,
+            eye,
+        }
+    };
+    (v, code)
+}
+
+/// Transforms the vertices of the visible objects (`bases[slot]` is the first vertex of
+/// object slot `slot`, `bases[visible.len()]` the total): the vertices and their outcodes.
+pub(super) fn transform_vertices(
+    scene: &Scene,
+    visible: &[(usize, bool)],
+    bases: &[u32],
+    t: &ViewTransform,
+    threads: usize,
+) -> (Vec<ViewVertex>, Vec<u8>) {
+    let total = bases.last().map_or(0, |&b| b as usize);
+    let model_views: Vec<DMat4> = visible
+        .iter()
+        .map(|&(k, _)| t.view * scene.objects()[k].transform)
+        .collect();
+    let mut vertices = Vec::with_capacity(total);
+    let mut codes = Vec::with_capacity(total);
+    #[cfg(feature = "parallel")]
+    if threads > 1 && total >= PARALLEL_MIN {
+        use rayon::prelude::*;
+        let slot_of = |g: usize| bases.partition_point(|&b| b as usize <= g) - 1;
+        (0..total)
+            .into_par_iter()
+            .map_init(
+                || usize::MAX,
+                |slot, g| {
+                    // Each job walks a contiguous range: look the object up once per
+                    // object, not per vertex.
+                    if *slot >= visible.len()
+                        || g < bases[*slot] as usize
+                        || g >= bases[*slot + 1] as usize
+                    {
+                        *slot = slot_of(g);
+                    }
+                    let s = *slot;
+                    let o = &scene.objects()[visible[s].0];
+                    let p = o.mesh.positions()[g - bases[s] as usize];
+                    transform_vertex(&model_views[s], t, p)
+                },
+            )
+            .unzip_into_vecs(&mut vertices, &mut codes);
+        return (vertices, codes);
+    }
+    let _ = threads;
+    for (slot, &(k, _)) in visible.iter().enumerate() {
+        let mv = &model_views[slot];
+        for &p in scene.objects()[k].mesh.positions() {
+            let (v, c) = transform_vertex(mv, t, p);
+            vertices.push(v);
+            codes.push(c);
+        }
+    }
+    (vertices, codes)
+}
+
+/// What the face pass reads.
+pub(super) struct FaceContext<'a> {
+    pub scene: &'a Scene,
+    pub visible: &'a [(usize, bool)],
+    pub bases: &'a [u32],
+    pub vertices: &'a [ViewVertex],
+    pub codes: &'a [u8],
+    pub t: &'a ViewTransform,
+    pub backface: BackfaceMode,
+}
+
+/// The polygons the face pass emits, and its counts per stage.
+#[derive(Default)]
+pub(super) struct FaceOutput {
+    /// Polygon starts: with the leading 0 in the final output, without it in a chunk's.
+    pub starts: Vec<u32>,
+    pub indices: Vec<u32>,
+    pub faces: Vec<u32>,
+    pub objects: Vec<u32>,
+    /// Vertices made by clipping, to append after the shared ones.
+    pub clipped_vertices: Vec<ViewVertex>,
+    /// Faces kept by the back-face test.
+    pub front: u64,
+    /// Faces kept by the outcode test.
+    pub kept: u64,
+    /// Faces that crossed a plane and were clipped.
+    pub to_clip: u64,
+    /// Clipped faces with something left.
+    pub clipped: u64,
+}
+
+/// Scratch vectors of the clipper.
+#[derive(Default)]
+struct Scratch {
+    eye: Vec<DVec3>,
+    input: Vec<ClipEyeVertex>,
+    out: Vec<ClipEyeVertex>,
+    scratch: Vec<ClipEyeVertex>,
+}
+
+/// Polygons `p0..p1` of visible object `slot`, appended to `out`. A vertex made by
+/// clipping gets index `new_base + ` its position in `out.clipped_vertices`.
+#[inline(always)]
+fn faces_of(
+    ctx: &FaceContext<'_>,
+    slot: usize,
+    polygons: std::ops::Range<usize>,
+    new_base: u32,
+    out: &mut FaceOutput,
+    s: &mut Scratch,
+) {
+    let (k, inside) = ctx.visible[slot];
+    let o = &ctx.scene.objects()[k];
+    let base = ctx.bases[slot];
+    let cull = ctx.backface.applies_to(o.closed);
+    let (mstarts, mindices, mfaces) = o.mesh.polygon_arrays();
+    let (vertices, codes, t) = (ctx.vertices, ctx.codes, ctx.t);
+    for p in polygons {
+        let poly = &mindices[mstarts[p] as usize..mstarts[p + 1] as usize];
+        if cull {
+            let eye = |i: u32| vertices[(base + i) as usize].eye;
+            let normal = if let &[a, b, c] = poly {
+                let (a, b, c) = (eye(a), eye(b), eye(c));
+                (b - a).cross(c - a)
+            } else {
+                s.eye.clear();
+                s.eye.extend(poly.iter().map(|&i| eye(i)));
+                newell_normal(&s.eye)
+            };
+            let normal = if o.mirrored { -normal } else { normal };
+            if t.is_back_facing_eye(normal, eye(poly[0])) {
+                continue;
+            }
+        }
+        out.front += 1;
+        let or = if inside {
+            0
+        } else {
+            let (mut and, mut or) = (0x3f, 0);
+            for &i in poly {
+                let c = codes[(base + i) as usize];
+                and &= c;
+                or |= c;
+            }
+            if and != 0 {
+                continue;
+            }
+            or
+        };
+        out.kept += 1;
+        if or == 0 {
+            out.indices.extend(poly.iter().map(|&i| base + i));
+        } else {
+            out.to_clip += 1;
+            s.input.clear();
+            s.input.extend(poly.iter().map(|&i| {
+                // The vertex pass's clip position, recomputed from the same eye position
+                // by the same function: the same bits.
+                let eye = vertices[(base + i) as usize].eye;
+                ClipEyeVertex {
+                    clip: t.eye_to_clip(eye),
+                    eye,
+                }
+            }));
+            clip_polygon_homogeneous_masked(&s.input, or, &mut s.out, &mut s.scratch);
+            if s.out.is_empty() {
+                continue;
+            }
+            out.clipped += 1;
+            for v in &s.out {
+                out.indices
+                    .push(new_base + out.clipped_vertices.len() as u32);
+                out.clipped_vertices.push(t.to_screen(v.clip, v.eye));
+            }
+        }
+        out.starts.push(out.indices.len() as u32);
+        out.faces.push(o.first_face + mfaces[p]);
+        out.objects.push(k as u32);
+    }
+}
+
+/// Marks a chunk-local index of a vertex made by clipping, until the chunks are joined.
+#[cfg(feature = "parallel")]
+const LOCAL: u32 = 1 << 31;
+
+/// Runs the face pass over all visible objects.
+pub(super) fn process_faces(
+    ctx: &FaceContext<'_>,
+    face_total: usize,
+    threads: usize,
+) -> FaceOutput {
+    let vertex_total = ctx.vertices.len();
+    #[cfg(feature = "parallel")]
+    if threads > 1 && face_total >= PARALLEL_MIN && vertex_total < LOCAL as usize {
+        return process_faces_parallel(ctx, face_total, threads);
+    }
+    let _ = threads;
+    let mut out = FaceOutput {
+        starts: Vec::with_capacity(face_total + 1),
+        indices: Vec::with_capacity(face_total * 3),
+        faces: Vec::with_capacity(face_total),
+        objects: Vec::with_capacity(face_total),
+        ..FaceOutput::default()
+    };
+    out.starts.push(0);
+    let mut scratch = Scratch::default();
+    for (slot, &(k, _)) in ctx.visible.iter().enumerate() {
+        let n = ctx.scene.objects()[k].mesh.polygon_count();
+        faces_of(ctx, slot, 0..n, vertex_total as u32, &mut out, &mut scratch);
+    }
+    out
+}
+
+#[cfg(feature = "parallel")]
+fn process_faces_parallel(ctx: &FaceContext<'_>, face_total: usize, threads: usize) -> FaceOutput {
+    use rayon::prelude::*;
+    // Chunks of about equal face counts, each a list of (slot, polygon range).
+    let target = face_total.div_ceil(threads * 8).max(4096);
+    let mut chunks: Vec<Vec<(usize, std::ops::Range<usize>)>> = vec![Vec::new()];
+    let mut filled = 0;
+    for (slot, &(k, _)) in ctx.visible.iter().enumerate() {
+        let n = ctx.scene.objects()[k].mesh.polygon_count();
+        let mut p = 0;
+        while p < n {
+            let take = (n - p).min(target - filled);
+            chunks
+                .last_mut()
+                .expect("never empty")
+                .push((slot, p..p + take));
+            p += take;
+            filled += take;
+            if filled == target {
+                chunks.push(Vec::new());
+                filled = 0;
+            }
+        }
+    }
+    let parts: Vec<FaceOutput> = chunks
+        .par_iter()
+        .map(|segments| {
+            let size: usize = segments.iter().map(|(_, r)| r.len()).sum();
+            let mut out = FaceOutput {
+                starts: Vec::with_capacity(size),
+                indices: Vec::with_capacity(size * 3),
+                faces: Vec::with_capacity(size),
+                objects: Vec::with_capacity(size),
+                ..FaceOutput::default()
+            };
+            let mut scratch = Scratch::default();
+            for (slot, range) in segments {
+                faces_of(ctx, *slot, range.clone(), LOCAL, &mut out, &mut scratch);
+            }
+            out
+        })
+        .collect();
+    let polygons: usize = parts.iter().map(|p| p.faces.len()).sum();
+    let index_count: usize = parts.iter().map(|p| p.indices.len()).sum();
+    let mut out = FaceOutput {
+        starts: Vec::with_capacity(polygons + 1),
+        indices: Vec::with_capacity(index_count),
+        faces: Vec::with_capacity(polygons),
+        objects: Vec::with_capacity(polygons),
+        ..FaceOutput::default()
+    };
+    out.starts.push(0);
+    for part in parts {
+        let offset = out.indices.len() as u32;
+        out.starts.extend(part.starts.iter().map(|&s| s + offset));
+        if part.clipped_vertices.is_empty() {
+            out.indices.extend_from_slice(&part.indices);
+        } else {
+            let new_base = (ctx.vertices.len() + out.clipped_vertices.len()) as u32;
+            out.indices.extend(
+                part.indices
+                    .iter()
+                    .map(|&i| if i >= LOCAL { i - LOCAL + new_base } else { i }),
+            );
+        }
+        out.clipped_vertices
+            .extend_from_slice(&part.clipped_vertices);
+        out.faces.extend_from_slice(&part.faces);
+        out.objects.extend_from_slice(&part.objects);
+        out.front += part.front;
+        out.kept += part.kept;
+        out.to_clip += part.to_clip;
+        out.clipped += part.clipped;
+    }
+    out
+}
