@@ -392,7 +392,10 @@ mod tests {
             max: DVec3::ONE,
         };
         assert_eq!(clip_segment_box(DVec3::NAN, DVec3::ONE, &cube), None);
-        assert_eq!(clip_segment_box(DVec3::ZERO, DVec3::ONE, &Aabb::EMPTY), None);
+        assert_eq!(
+            clip_segment_box(DVec3::ZERO, DVec3::ONE, &Aabb::EMPTY),
+            None
+        );
         assert_eq!(clip_segment_homogeneous(DVec4::NAN, DVec4::W), None);
     }
 
@@ -438,7 +441,9 @@ mod tests {
         assert!(steps.len() <= 5);
         if let Some((p, q)) = res {
             for v in [p, q] {
-                assert!(v.cmpge(DVec2::splat(-1e-12)).all() && v.cmple(DVec2::splat(1.0 + 1e-12)).all());
+                assert!(
+                    v.cmpge(DVec2::splat(-1e-12)).all() && v.cmple(DVec2::splat(1.0 + 1e-12)).all()
+                );
             }
         }
     }

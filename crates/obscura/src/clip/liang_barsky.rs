@@ -219,7 +219,10 @@ mod tests {
         // A point (zero-length segment) inside and outside.
         let p = DVec2::new(0.5, 0.5);
         assert_eq!(clip_segment_2d(p, p, &r), Some((p, p)));
-        assert_eq!(clip_segment_2d(DVec2::splat(2.), DVec2::splat(2.), &r), None);
+        assert_eq!(
+            clip_segment_2d(DVec2::splat(2.), DVec2::splat(2.), &r),
+            None
+        );
     }
 
     #[test]

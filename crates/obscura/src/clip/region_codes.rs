@@ -281,8 +281,7 @@ pub fn clip_segment(window: &ConvexWindow, p: DVec2, q: DVec2) -> Option<(DVec2,
     ts.sort_unstable_by(f64::total_cmp);
     let mut kept: Option<(f64, f64)> = None;
     let mut start = 0.0;
-    for j in 0..=k {
-        let end = if j < k { ts[j] } else { 1.0 };
+    for end in ts.iter().copied().chain(std::iter::once(1.0)) {
         let mid = point_at(p, q, 0.5 * (start + end));
         if window.contains(mid) {
             kept = Some(match kept {
@@ -384,7 +383,10 @@ mod tests {
         assert_eq!(c.to_string(), "0011");
         assert_eq!(c.low_bits(), 0b0011);
         assert_eq!(c.ones().collect::<Vec<_>>(), vec![0, 1]);
-        assert_eq!(region_code(&sq, DVec2::new(f64::NAN, 0.)).to_string(), "1111");
+        assert_eq!(
+            region_code(&sq, DVec2::new(f64::NAN, 0.)).to_string(),
+            "1111"
+        );
     }
 
     #[test]

@@ -324,7 +324,10 @@ mod tests {
         assert_eq!(Rect::new(0., 0., 0., 1.), Err(WindowError::EmptyRectangle));
         assert_eq!(Rect::new(1., 0., 0., 1.), Err(WindowError::EmptyRectangle));
         assert_eq!(Rect::new(f64::NAN, 0., 1., 1.), Err(WindowError::NonFinite));
-        assert_eq!(Rect::new(0., 0., f64::INFINITY, 1.), Err(WindowError::NonFinite));
+        assert_eq!(
+            Rect::new(0., 0., f64::INFINITY, 1.),
+            Err(WindowError::NonFinite)
+        );
     }
 
     #[test]
