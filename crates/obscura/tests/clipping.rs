@@ -827,6 +827,10 @@ proptest! {
         let (wa, wb) = (ConvexWindow::new(&a).unwrap(), ConvexWindow::new(&b).unwrap());
         let ab = sh::clip_polygon_2d(&a, &wb);
         let ba = sh::clip_polygon_2d(&b, &wa);
+        // The buffer-reusing form gives the same, whatever the buffers held before.
+        let (mut out, mut scratch) = (ba.clone(), a.clone());
+        sh::clip_polygon_2d_into(&a, &wb, &mut out, &mut scratch);
+        prop_assert_eq!(&out, &ab);
         let (area_ab, area_ba) = (polygon_area_2d(&ab).abs(), polygon_area_2d(&ba).abs());
         prop_assert!((area_ab - area_ba).abs() <= 1e-9 * (1.0 + area_ab), "{area_ab} {area_ba}");
         prop_assert!(area_ab <= wa.area().min(wb.area()) + 1e-9);
@@ -920,6 +924,9 @@ proptest! {
         let pts = tri.map(|(x, y, z)| DVec3::new(x, y, z));
         let cube = Aabb { min: DVec3::splat(-1.0), max: DVec3::ONE };
         let by_box = sh::clip_polygon_box(&pts, &cube);
+        let (mut out, mut scratch) = (vec![DVec3::ONE; 5], vec![DVec3::ZERO; 2]);
+        sh::clip_polygon_box_into(&pts, &cube, &mut out, &mut scratch);
+        prop_assert_eq!(&out, &by_box);
         let by_h: Vec<DVec3> = sh::clip_polygon_homogeneous(&pts.map(|p| p.extend(1.0)))
             .iter()
             .map(|v| v.truncate())

@@ -43,22 +43,17 @@ use crate::geom::Aabb;
 #[inline]
 fn interval(pq: &[(f64, f64)]) -> Option<(f64, f64)> {
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    let mut parallel_outside = false;
+    // No early exit: the divisions are independent and the selections compile to
+    // conditional moves, which beats branching on the random signs of `p_i`.
     for &(p, q) in pq {
-        if p == 0.0 {
-            if q < 0.0 {
-                return None;
-            }
-            continue;
-        }
         let r = q / p;
-        if p < 0.0 {
-            t0 = t0.max(r);
-        } else {
-            t1 = t1.min(r);
-        }
-        if t0 > t1 {
-            return None;
-        }
+        t0 = if p < 0.0 { t0.max(r) } else { t0 };
+        t1 = if p > 0.0 { t1.min(r) } else { t1 };
+        parallel_outside |= p == 0.0 && q < 0.0;
+    }
+    if parallel_outside || t0 > t1 {
+        return None;
     }
     Some((t0, t1))
 }

@@ -342,20 +342,33 @@ fn lerp3(a: DVec3, b: DVec3, t: f64) -> DVec3 {
 /// ```
 #[must_use]
 pub fn clip_polygon_2d(polygon: &[DVec2], window: &ConvexWindow) -> Vec<DVec2> {
-    if polygon.iter().any(|p| !p.is_finite()) {
-        return Vec::new();
-    }
-    let mut out = polygon.to_vec();
+    let mut out = Vec::with_capacity(polygon.len() + window.edge_count());
     let mut scratch = Vec::with_capacity(polygon.len() + window.edge_count());
+    clip_polygon_2d_into(polygon, window, &mut out, &mut scratch);
+    out
+}
+
+/// [`clip_polygon_2d`] into `out` (cleared first), with `scratch` reused between
+/// calls: no allocation once the buffers have grown.
+pub fn clip_polygon_2d_into(
+    polygon: &[DVec2],
+    window: &ConvexWindow,
+    out: &mut Vec<DVec2>,
+    scratch: &mut Vec<DVec2>,
+) {
+    out.clear();
+    if polygon.iter().any(|p| !p.is_finite()) {
+        return;
+    }
+    out.extend_from_slice(polygon);
     for i in 0..window.edge_count() {
-        stage(&out, |p| window.edge_value(i, p), lerp2, &mut scratch);
-        std::mem::swap(&mut out, &mut scratch);
+        stage(out, |p| window.edge_value(i, p), lerp2, scratch);
+        std::mem::swap(out, scratch);
         if out.len() < 3 {
             out.clear();
-            break;
+            return;
         }
     }
-    out
 }
 
 /// Sutherland-Hodgman 2D on a segment (an open polyline of two vertices): the part of
@@ -403,20 +416,33 @@ fn box_boundaries(bounds: &Aabb) -> [(usize, f64, f64); 6] {
 /// ```
 #[must_use]
 pub fn clip_polygon_box(polygon: &[DVec3], bounds: &Aabb) -> Vec<DVec3> {
-    if !valid_box(bounds) || polygon.iter().any(|p| !p.is_finite()) {
-        return Vec::new();
-    }
-    let mut out = polygon.to_vec();
+    let mut out = Vec::with_capacity(polygon.len() + 6);
     let mut scratch = Vec::with_capacity(polygon.len() + 6);
+    clip_polygon_box_into(polygon, bounds, &mut out, &mut scratch);
+    out
+}
+
+/// [`clip_polygon_box`] into `out` (cleared first), with `scratch` reused between
+/// calls: no allocation once the buffers have grown.
+pub fn clip_polygon_box_into(
+    polygon: &[DVec3],
+    bounds: &Aabb,
+    out: &mut Vec<DVec3>,
+    scratch: &mut Vec<DVec3>,
+) {
+    out.clear();
+    if !valid_box(bounds) || polygon.iter().any(|p| !p.is_finite()) {
+        return;
+    }
+    out.extend_from_slice(polygon);
     for (axis, bound, sign) in box_boundaries(bounds) {
-        stage(&out, |p| sign * (p[axis] - bound), lerp3, &mut scratch);
-        std::mem::swap(&mut out, &mut scratch);
+        stage(out, |p| sign * (p[axis] - bound), lerp3, scratch);
+        std::mem::swap(out, scratch);
         if out.len() < 3 {
             out.clear();
-            break;
+            return;
         }
     }
-    out
 }
 
 /// Sutherland-Hodgman on a segment against an axis-aligned box; `None` when nothing
