@@ -524,6 +524,46 @@ fn clipping_after_projection_goes_wrong_across_the_eye_plane() {
 }
 
 #[test]
+fn split_by_hand() {
+    // Square [-1,1]^2 at z = 0 (area 4), plane x = 0.5 with normal +x.
+    // Edges (1,-1)->(1,1) front; (-1,-1)->(1,-1) crosses at (.5,-1); (1,1)->(-1,1)
+    // crosses at (.5,1). Front: x in [.5,1], area .5 * 2 = 1; back: x in [-1,.5], 3.
+    let sq = [
+        DVec3::new(-1., -1., 0.),
+        DVec3::new(1., -1., 0.),
+        DVec3::new(1., 1., 0.),
+        DVec3::new(-1., 1., 0.),
+    ];
+    let plane = Plane::from_point_normal(DVec3::new(0.5, 0., 0.), DVec3::X);
+    let Split::Spanning { front, back } = split_polygon(&sq, &plane, 1e-12) else {
+        panic!("the plane crosses the square")
+    };
+    assert_eq!(
+        front,
+        vec![
+            DVec3::new(0.5, -1., 0.),
+            DVec3::new(1., -1., 0.),
+            DVec3::new(1., 1., 0.),
+            DVec3::new(0.5, 1., 0.)
+        ]
+    );
+    assert_eq!(polygon_area(&back), 3.0);
+    // A plane without a normal cannot split. Today the result depends on d (all
+    // Front for d > 0, Coplanar for d = 0: see the report); it must at least not panic.
+    for d in [1.0, 0.0, f64::NAN] {
+        let degenerate = Plane {
+            normal: DVec3::ZERO,
+            d,
+        };
+        let _ = split_polygon(&sq, &degenerate, 1e-9);
+    }
+    assert!(matches!(
+        split_polygon(&[], &plane, 1e-9),
+        Split::Coplanar { .. }
+    ));
+}
+
+#[test]
 fn bad_input_never_panics() {
     let rect = Rect::new(0., 0., 1., 1.).unwrap();
     let w = ConvexWindow::rectangle(&rect);
