@@ -548,19 +548,22 @@ fn split_by_hand() {
         ]
     );
     assert_eq!(polygon_area(&back), 3.0);
-    // A plane without a normal cannot split. Today the result depends on d (all
-    // Front for d > 0, Coplanar for d = 0: see the report); it must at least not panic.
+    // A plane without a usable normal, or a polygon of fewer than three vertices,
+    // splits nothing: documented as Front.
     for d in [1.0, 0.0, f64::NAN] {
         let degenerate = Plane {
             normal: DVec3::ZERO,
             d,
         };
-        let _ = split_polygon(&sq, &degenerate, 1e-9);
+        assert_eq!(split_polygon(&sq, &degenerate, 1e-9), Split::Front);
     }
-    assert!(matches!(
-        split_polygon(&[], &plane, 1e-9),
-        Split::Coplanar { .. }
-    ));
+    let nan_normal = Plane {
+        normal: DVec3::new(f64::NAN, 0.0, 1.0),
+        d: 0.0,
+    };
+    assert_eq!(split_polygon(&sq, &nan_normal, 1e-9), Split::Front);
+    assert_eq!(split_polygon(&[], &plane, 1e-9), Split::Front);
+    assert_eq!(split_polygon(&sq[..2], &plane, 1e-9), Split::Front);
 }
 
 #[test]
