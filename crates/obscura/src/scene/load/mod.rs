@@ -27,6 +27,8 @@
 
 pub mod mtl;
 pub mod obj;
+pub mod ply;
+pub mod stl;
 
 use std::path::Path;
 
@@ -73,6 +75,8 @@ pub fn load_objects(path: &Path) -> Result<Loaded> {
     }
     match ext.as_str() {
         "obj" => obj::load(path, &bytes),
+        "stl" => stl::load(path, bytes),
+        "ply" => ply::load(path, &bytes),
         _ => Err(Error::UnsupportedFormat {
             path: path.to_path_buf(),
         }),
