@@ -25,6 +25,7 @@
 //! Complexity: every loader is linear in the file size (plus the hashing of vertex
 //! positions where a format needs welding). Files are read whole into memory.
 
+pub mod gltf;
 pub mod mtl;
 pub mod obj;
 pub mod ply;
@@ -75,11 +76,10 @@ pub fn load_objects(path: &Path) -> Result<Loaded> {
     }
     match ext.as_str() {
         "obj" => obj::load(path, &bytes),
+        "gltf" | "glb" => gltf::load(path, &bytes),
         "stl" => stl::load(path, bytes),
         "ply" => ply::load(path, &bytes),
-        _ => Err(Error::UnsupportedFormat {
-            path: path.to_path_buf(),
-        }),
+        _ => unreachable!("filtered by MESH_EXTENSIONS"),
     }
 }
 
