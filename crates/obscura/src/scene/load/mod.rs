@@ -30,6 +30,7 @@ pub mod mtl;
 pub mod obj;
 pub mod ply;
 pub mod stl;
+pub mod toml_scene;
 
 use std::path::Path;
 
@@ -85,6 +86,9 @@ pub fn load_objects(path: &Path) -> Result<Loaded> {
 
 /// Loads a scene file (`.toml`) or a mesh file into a scene.
 pub fn load_file(path: &Path) -> Result<Scene> {
+    if extension(path).as_deref() == Some("toml") {
+        return toml_scene::load(path);
+    }
     let loaded = load_objects(path)?;
     scene_from(loaded, &path.display().to_string())
 }
@@ -140,4 +144,14 @@ pub(crate) fn clamp_color(c: [f64; 3]) -> [f32; 3] {
             0.0
         }
     })
+}
+
+/// The 1-based line of a byte offset in a text.
+pub(crate) fn line_of_offset(text: &str, offset: usize) -> usize {
+    let end = offset.min(text.len());
+    text.as_bytes()[..end]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
 }
