@@ -137,7 +137,7 @@ fn radix_sort(keys: &mut Vec<u64>, bits: u32) {
         for &k in keys.iter() {
             count[(k >> shift & 0xff) as usize] += 1;
         }
-        if count.iter().any(|&c| c == keys.len()) {
+        if count.contains(&keys.len()) {
             continue;
         }
         let mut offset = [0usize; 256];
