@@ -32,6 +32,8 @@
 //!   incremental depth); Goldberg, *What every computer scientist should know about
 //!   floating-point arithmetic* (1991) for the rounding facts.
 
+use std::ops::Range;
+
 use super::kernel::RasterKernel;
 
 /// Spans shorter than this are stepped serially: a run costs more to set up than a few
@@ -68,19 +70,21 @@ pub fn linear_run(z: f64, d: f64, max: usize) -> (f64, usize) {
     if (r - ri).abs() == 0.5 || ri.abs() >= 4_503_599_627_370_496.0 {
         return single;
     }
-    let step = ri * u;
-    if step == 0.0 {
-        // |d| < u / 2: fl(z + d) = z, the key never moves.
-        return (0.0, max);
-    }
     let bottom = f64::from_bits(exp << 52);
     let (lo, hi) = if z > 0.0 {
         (bottom + u, 2.0 * bottom - u)
     } else {
         (-(2.0 * bottom - u), -(bottom + u))
     };
+    // Checked before a zero step is trusted: at z = 2^e the doubles below are u / 2
+    // apart, and a step of less than u / 2 downwards does move the key.
     if !(lo <= z && z <= hi) {
         return single;
+    }
+    let step = ri * u;
+    if step == 0.0 {
+        // |d| < u / 2 and z's neighbours are u away: fl(z + d) = z, the key never moves.
+        return (0.0, max);
     }
     // The end point, evaluated exactly when it is inside [lo, hi] (and outside it when
     // it is not: the computation is monotonic and lo, hi are doubles), decides; a
@@ -167,34 +171,36 @@ pub fn depth_test_linear(keys: &mut [f32], ids: &mut [u32], z: f64, step: f64, f
     written
 }
 
-/// Depth-tests a span whose first key is `z` and whose keys step by `d`, giving the
-/// same result as [`depth_test_serial`] (the module doc proves it), with the linear
-/// runs drawn by `kernel`. Returns the number of pixels written.
+/// Depth-tests pixels `span` of the slices, the first key being `z` and the keys
+/// stepping by `d`, giving the same result as [`depth_test_serial`] on them (the module
+/// doc proves it), with the linear runs drawn by `kernel` (which may rewrite other
+/// elements of the slices unchanged). Returns the number of pixels written.
 #[inline(always)]
 pub fn depth_test_span<K: RasterKernel>(
     kernel: K,
     keys: &mut [f32],
     ids: &mut [u32],
+    span: Range<usize>,
     z: f64,
     d: f64,
     face: u32,
 ) -> u32 {
-    let n = keys.len().min(ids.len());
+    let (start, end) = (span.start, span.end);
+    let n = end.saturating_sub(start);
     if n < SERIAL_SPAN {
-        return depth_test_serial(keys, ids, z, d, face).0;
+        return depth_test_serial(&mut keys[start..end], &mut ids[start..end], z, d, face).0;
     }
-    let (mut z, mut k, mut written) = (z, 0usize, 0u32);
-    while k < n {
-        let (step, m) = linear_run(z, d, n - k);
+    let (mut z, mut k, mut written) = (z, start, 0u32);
+    while k < end {
+        let (step, m) = linear_run(z, d, end - k);
         if m >= SERIAL_SPAN {
-            written +=
-                kernel.depth_test_linear(&mut keys[k..k + m], &mut ids[k..k + m], z, step, face);
+            written += kernel.depth_test_linear(keys, ids, k..k + m, z, step, face);
             // The chain value at the run's last pixel, then one serial step past it.
             z += (m - 1) as f64 * step;
             z += d;
             k += m;
         } else {
-            let s = (n - k).min(SERIAL_SPAN);
+            let s = (end - k).min(SERIAL_SPAN);
             let (w, next) = depth_test_serial(&mut keys[k..k + s], &mut ids[k..k + s], z, d, face);
             written += w;
             z = next;
@@ -262,6 +268,13 @@ mod tests {
         // d below half a unit: the key stays, however long the span.
         assert_eq!(linear_run(z, u / 3.0, 100), (0.0, 100));
         assert_eq!(check_run(z, u / 3.0, 100), 100);
+        // At a power of two the doubles below are twice as dense: a step too small to
+        // move the key upwards moves it downwards.
+        let d = -0.3 * u;
+        assert_ne!(0.5 + d, 0.5);
+        assert_eq!(check_run(0.5, d, 100), 1);
+        assert_eq!(check_run(-0.5, -d, 100), 1);
+        assert_eq!(check_run(0.5, -d, 100), 1);
         // Zero, subnormal, infinite and NaN keys or steps: serial.
         for (z, d) in [
             (0.0, 1e-3),
@@ -297,7 +310,7 @@ mod tests {
                 .collect();
             let mut ids: Vec<u32> = (0..n as u32).collect();
             let (mut k2, mut i2) = (keys.clone(), ids.clone());
-            let w1 = depth_test_span(Portable, &mut keys, &mut ids, z, d, 7777);
+            let w1 = depth_test_span(Portable, &mut keys, &mut ids, 0..n, z, d, 7777);
             let (w2, _) = depth_test_serial(&mut k2, &mut i2, z, d, 7777);
             assert_eq!(w1, w2);
             assert_eq!(ids, i2);

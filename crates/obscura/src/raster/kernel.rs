@@ -45,6 +45,16 @@ impl SpanCounts {
 }
 
 impl DepthTarget<'_> {
+    /// The keys and ids of image row `y`.
+    #[inline(always)]
+    pub fn row_mut(&mut self, y: u32) -> (&mut [f32], &mut [u32]) {
+        let row = (y - self.y0) as usize * self.width;
+        (
+            &mut self.keys[row..row + self.width],
+            &mut self.ids[row..row + self.width],
+        )
+    }
+
     /// Depth-tests the span `[x0, x1)` of image row `y` against the polygon with depth
     /// plane `plane`: the key starts from the plane at the span's first sample and is
     /// stepped by `dzdx`, as the reference z-buffer does.
@@ -59,16 +69,9 @@ impl DepthTarget<'_> {
         face: u32,
     ) -> SpanCounts {
         let z = plane.at(f64::from(x0) + 0.5, f64::from(y) + 0.5);
-        let row = (y - self.y0) as usize * self.width;
-        let (a, b) = (row + x0 as usize, row + x1 as usize);
-        let written = depth_test_span(
-            kernel,
-            &mut self.keys[a..b],
-            &mut self.ids[a..b],
-            z,
-            plane.dzdx,
-            face,
-        );
+        let (keys, ids) = self.row_mut(y);
+        let span = x0 as usize..x1 as usize;
+        let written = depth_test_span(kernel, keys, ids, span, z, plane.dzdx, face);
         SpanCounts {
             tested: u64::from(x1 - x0),
             written: u64::from(written),
@@ -78,13 +81,15 @@ impl DepthTarget<'_> {
 
 /// Kernels a rasterizer's drawing loop is generic over.
 pub trait RasterKernel: Copy {
-    /// Depth-tests pixels whose keys are `z + k step` (a run of
-    /// [`depth_span::linear_run`]): stores `-(key as f32)` and `face` where that is
-    /// below the buffer; returns the number of pixels written.
+    /// Depth-tests pixels `span` of the slices, whose keys are `z + k step` for the
+    /// `k`-th of them (a run of [`depth_span::linear_run`]): stores `-(key as f32)` and
+    /// `face` where that is below the buffer; returns the number of pixels written.
+    /// Other elements of the slices may be rewritten with their own values.
     fn depth_test_linear(
         self,
         keys: &mut [f32],
         ids: &mut [u32],
+        span: Range<usize>,
         z: f64,
         step: f64,
         face: u32,
@@ -127,11 +132,12 @@ impl RasterKernel for Portable {
         self,
         keys: &mut [f32],
         ids: &mut [u32],
+        span: Range<usize>,
         z: f64,
         step: f64,
         face: u32,
     ) -> u32 {
-        depth_span::depth_test_linear(keys, ids, z, step, face)
+        depth_span::depth_test_linear(&mut keys[span.clone()], &mut ids[span], z, step, face)
     }
 
     #[inline(always)]

@@ -50,12 +50,13 @@ impl RasterKernel for Avx2 {
         self,
         keys: &mut [f32],
         ids: &mut [u32],
+        span: Range<usize>,
         z: f64,
         step: f64,
         face: u32,
     ) -> u32 {
         // SAFETY: an `Avx2` exists only when the processor has the features enabled.
-        unsafe { depth_test_linear_avx2(keys, ids, z, step, face) }
+        unsafe { depth_test_linear_avx2(keys, ids, span, z, step, face) }
     }
 
     #[inline(always)]
@@ -87,73 +88,102 @@ impl RasterKernel for Avx2 {
     }
 }
 
+/// Depth-tests the eight pixels from `at` with keys `nk` (negated, as `f32`; `+inf`
+/// in lanes to leave alone), blending keys and ids; returns how many it wrote.
 #[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
-fn depth_test_linear_avx2(keys: &mut [f32], ids: &mut [u32], z: f64, step: f64, face: u32) -> u32 {
-    let n = keys.len().min(ids.len());
-    let (keys, ids) = (&mut keys[..n], &mut ids[..n]);
+fn test_eight(keys: &mut [f32], ids: &mut [u32], at: usize, nk: __m256, face: __m256i) -> u32 {
+    let (k8, i8) = (&mut keys[at..at + 8], &mut ids[at..at + 8]);
+    let kp = k8.as_mut_ptr();
+    let ip = i8.as_mut_ptr().cast::<__m256i>();
+    // SAFETY: `k8` and `i8` are 8 elements long; unaligned loads and stores.
+    unsafe {
+        let old = _mm256_loadu_ps(kp);
+        let take = _mm256_cmp_ps::<_CMP_LT_OQ>(nk, old);
+        // min(nk, old) is the blend of the two by `take` (equal values are equal, a
+        // NaN key keeps `old`); written as a blend, the compiler makes a masked store
+        // of it, several times slower here.
+        _mm256_storeu_ps(kp, _mm256_min_ps(nk, old));
+        let old_ids = _mm256_loadu_si256(ip);
+        _mm256_storeu_si256(
+            ip,
+            _mm256_blendv_epi8(old_ids, face, _mm256_castps_si256(take)),
+        );
+        (_mm256_movemask_ps(take) as u32).count_ones()
+    }
+}
+
+/// The negated `f32` keys `z + k step` of eight consecutive pixels from `k` (`k0`,
+/// `k0 + 4` the lane offsets), exact as the module doc of `depth_span` shows.
+#[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
+fn keys_eight(z: __m256d, step: __m256d, k0: __m256d, k4: __m256d) -> __m256 {
+    let a = _mm256_add_pd(z, _mm256_mul_pd(k0, step));
+    let b = _mm256_add_pd(z, _mm256_mul_pd(k4, step));
+    _mm256_xor_ps(
+        _mm256_set_m128(_mm256_cvtpd_ps(b), _mm256_cvtpd_ps(a)),
+        _mm256_set1_ps(-0.0),
+    )
+}
+
+#[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
+fn depth_test_linear_avx2(
+    keys: &mut [f32],
+    ids: &mut [u32],
+    span: Range<usize>,
+    z: f64,
+    step: f64,
+    face: u32,
+) -> u32 {
+    let len = keys.len().min(ids.len());
+    let (start, end) = (span.start.min(len), span.end.min(len));
     let zv = _mm256_set1_pd(z);
     let sv = _mm256_set1_pd(step);
     let mut lo = _mm256_setr_pd(0.0, 1.0, 2.0, 3.0);
     let mut hi = _mm256_setr_pd(4.0, 5.0, 6.0, 7.0);
     let eight = _mm256_set1_pd(8.0);
-    let sign = _mm256_set1_ps(-0.0);
     let facev = _mm256_set1_epi32(face as i32);
     let mut written = 0;
-    let mut kc = keys.chunks_exact_mut(8);
-    let mut ic = ids.chunks_exact_mut(8);
-    for (k8, i8) in (&mut kc).zip(&mut ic) {
-        let a = _mm256_add_pd(zv, _mm256_mul_pd(lo, sv));
-        let b = _mm256_add_pd(zv, _mm256_mul_pd(hi, sv));
-        let nk = _mm256_xor_ps(
-            _mm256_set_m128(_mm256_cvtpd_ps(b), _mm256_cvtpd_ps(a)),
-            sign,
-        );
-        let kp = k8.as_mut_ptr();
-        let ip = i8.as_mut_ptr().cast::<__m256i>();
-        // SAFETY: `k8` and `i8` are 8 elements long; unaligned loads and stores.
-        unsafe {
-            let old = _mm256_loadu_ps(kp);
-            let take = _mm256_cmp_ps::<_CMP_LT_OQ>(nk, old);
-            _mm256_storeu_ps(kp, _mm256_blendv_ps(old, nk, take));
-            let old_ids = _mm256_loadu_si256(ip);
-            let new_ids = _mm256_blendv_epi8(old_ids, facev, _mm256_castps_si256(take));
-            _mm256_storeu_si256(ip, new_ids);
-            written += (_mm256_movemask_ps(take) as u32).count_ones();
-        }
+    let mut k = start;
+    while k + 8 <= end {
+        written += test_eight(keys, ids, k, keys_eight(zv, sv, lo, hi), facev);
         lo = _mm256_add_pd(lo, eight);
         hi = _mm256_add_pd(hi, eight);
+        k += 8;
     }
-    let rem = kc.into_remainder().len();
-    if rem > 0 {
-        // The last pixels with masked loads and stores: lanes past the span are neither
-        // read nor written.
-        let done = n - rem;
-        let a = _mm256_add_pd(zv, _mm256_mul_pd(lo, sv));
-        let b = _mm256_add_pd(zv, _mm256_mul_pd(hi, sv));
-        let nk = _mm256_xor_ps(
-            _mm256_set_m128(_mm256_cvtpd_ps(b), _mm256_cvtpd_ps(a)),
-            sign,
-        );
-        let lanes = _mm256_cmpgt_epi32(
-            _mm256_set1_epi32(rem as i32),
-            _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
-        );
-        let kp = keys[done..].as_mut_ptr();
-        let ip = ids[done..].as_mut_ptr().cast::<i32>();
-        // SAFETY: the pointers are to element `done` of the slices, and the masks enable
-        // only the `rem` lanes that remain in them.
-        unsafe {
-            let old = _mm256_maskload_ps(kp, lanes);
-            let take = _mm256_and_si256(
-                _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(nk, old)),
-                lanes,
-            );
-            _mm256_maskstore_ps(kp, take, nk);
-            _mm256_maskstore_epi32(ip, take, facev);
-            written += (_mm256_movemask_ps(_mm256_castsi256_ps(take)) as u32).count_ones();
-        }
+    let rem = end.saturating_sub(k);
+    if rem == 0 {
+        return written;
     }
-    written
+    let lanes = _mm256_cmpgt_epi32(
+        _mm256_set1_epi32(rem as i32),
+        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+    );
+    let nk = keys_eight(zv, sv, lo, hi);
+    if k + 8 <= len {
+        // Eight pixels of the slice, those past the span with key +inf: never taken,
+        // their key and id rewritten unchanged (within the caller's slice, so within
+        // its rows: no other thread's).
+        let nk = _mm256_blendv_ps(
+            _mm256_set1_ps(f32::INFINITY),
+            nk,
+            _mm256_castsi256_ps(lanes),
+        );
+        return written + test_eight(keys, ids, k, nk, facev);
+    }
+    // At the end of the slice: masked loads and stores touch only the span's pixels.
+    let kp = keys[k..].as_mut_ptr();
+    let ip = ids[k..].as_mut_ptr().cast::<i32>();
+    // SAFETY: the pointers are to element `k` of the slices, and the masks enable only
+    // the `rem` lanes left in them.
+    unsafe {
+        let old = _mm256_maskload_ps(kp, lanes);
+        let take = _mm256_and_si256(
+            _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(nk, old)),
+            lanes,
+        );
+        _mm256_maskstore_ps(kp, take, nk);
+        _mm256_maskstore_epi32(ip, take, facev);
+        written + (_mm256_movemask_ps(_mm256_castsi256_ps(take)) as u32).count_ones()
+    }
 }
 
 /// The covered columns of row `j` of a narrow polygon, any number of edges.
@@ -288,18 +318,121 @@ fn narrow_rows<const E: usize, const WIDE: bool>(
     c
 }
 
-/// [`RasterKernel::draw_wide`]: polygons of at most four edges get every row's span
-/// from one vector of four edges; others go row by row through [`row_span`].
-///
-/// Per edge (lane) the crossing of the row gives a guess `g` of the boundary column,
-/// clamped to the rectangle's columns `[x0, x1]`; the exact test at columns `g - 1`
-/// and `g` confirms it: for an edge whose inside pixels are those at or right of the
-/// boundary, `(g == x0 or not inside(g - 1)) and (g == x1 or inside(g))`, mirrored for
-/// the other direction; a horizontal edge must hold the row inside. Each test is
-/// monotonic along the row, so a confirmed `g` is the edge's exact boundary and the
-/// span is the intersection of the edges' intervals, as [`row_span`] computes it. A row
-/// with an unconfirmed guess (a crossing within rounding of a pixel centre) or a
-/// horizontal edge excluding it takes [`row_span`].
+/// The four lanes of a vector.
+#[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
+fn lanes(v: __m256d) -> [f64; 4] {
+    let mut a = [0.0; 4];
+    // SAFETY: `a` holds four doubles; unaligned store.
+    unsafe { _mm256_storeu_pd(a.as_mut_ptr(), v) };
+    a
+}
+
+/// One edge of a polygon, every value broadcast to the four lanes (four rows).
+#[derive(Clone, Copy)]
+struct EdgeLanes {
+    ox: __m256d,
+    oy: __m256d,
+    dx: __m256d,
+    dy: __m256d,
+    sign: __m256d,
+    threshold: __m256d,
+    inv_dy: __m256d,
+    rising: __m256d,
+    falling: __m256d,
+    flat: __m256d,
+}
+
+impl EdgeLanes {
+    #[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
+    fn new(e: &EdgeFunction) -> Self {
+        let all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        let zero = _mm256_setzero_pd();
+        // d(inside)/d(px) has the sign of -sign * dy.
+        let slope = -e.sign * e.dy;
+        let mask = |b: bool| if b { all } else { zero };
+        EdgeLanes {
+            ox: _mm256_set1_pd(e.ox),
+            oy: _mm256_set1_pd(e.oy),
+            dx: _mm256_set1_pd(e.dx),
+            dy: _mm256_set1_pd(e.dy),
+            sign: _mm256_set1_pd(e.sign),
+            threshold: _mm256_set1_pd(if e.include_zero {
+                -f64::from_bits(1)
+            } else {
+                0.0
+            }),
+            inv_dy: _mm256_set1_pd(1.0 / e.dy),
+            rising: mask(slope > 0.0),
+            falling: mask(slope < 0.0),
+            flat: mask(slope == 0.0),
+        }
+    }
+
+    /// EdgeFunction::inside_row at `px` for the row terms `row`: `sign * (row - dy *
+    /// (px - ox))` above the threshold.
+    #[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
+    fn inside(&self, row: __m256d, px: __m256d) -> __m256d {
+        let raw = _mm256_sub_pd(row, _mm256_mul_pd(self.dy, _mm256_sub_pd(px, self.ox)));
+        _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_mul_pd(self.sign, raw), self.threshold)
+    }
+}
+
+/// [`linear_run`](super::depth_span::linear_run) for four keys `z` at once, for a step
+/// `d` and spans of `n` pixels: the step `D` of each lane and a mask of the lanes whose
+/// whole span is one run (positive normal key, no tie, both ends inside the binade
+/// with a margin of one unit). Other lanes are left to the scalar function.
+#[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
+fn linear_runs(z: __m256d, d: __m256d, n: __m256d) -> (__m256d, __m256d) {
+    let exp = _mm256_and_si256(
+        _mm256_srli_epi64::<52>(_mm256_castpd_si256(z)),
+        _mm256_set1_epi64x(0x7ff),
+    );
+    let exp_ok = _mm256_and_si256(
+        _mm256_cmpgt_epi64(exp, _mm256_set1_epi64x(53)),
+        _mm256_cmpgt_epi64(_mm256_set1_epi64x(2046), exp),
+    );
+    let zero = _mm256_setzero_pd();
+    let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(z, zero);
+    let u = _mm256_castsi256_pd(_mm256_slli_epi64::<52>(_mm256_sub_epi64(
+        exp,
+        _mm256_set1_epi64x(52),
+    )));
+    let inv_u = _mm256_castsi256_pd(_mm256_slli_epi64::<52>(_mm256_sub_epi64(
+        _mm256_set1_epi64x(2098),
+        exp,
+    )));
+    let bottom = _mm256_castsi256_pd(_mm256_slli_epi64::<52>(exp));
+    let r = _mm256_mul_pd(d, inv_u);
+    // Nearest, ties to even: the same integer as f64::round except at ties, rejected.
+    let ri = _mm256_round_pd::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(r);
+    let abs = |v: __m256d| _mm256_andnot_pd(_mm256_set1_pd(-0.0), v);
+    let not_tie = _mm256_cmp_pd::<_CMP_LT_OQ>(abs(_mm256_sub_pd(r, ri)), _mm256_set1_pd(0.5));
+    let small = _mm256_cmp_pd::<_CMP_LT_OQ>(abs(ri), _mm256_set1_pd(4_503_599_627_370_496.0));
+    let step = _mm256_mul_pd(ri, u);
+    let lo = _mm256_add_pd(bottom, u);
+    let hi = _mm256_sub_pd(_mm256_add_pd(bottom, bottom), u);
+    let within = |v: __m256d| {
+        _mm256_and_pd(
+            _mm256_cmp_pd::<_CMP_LE_OQ>(lo, v),
+            _mm256_cmp_pd::<_CMP_LE_OQ>(v, hi),
+        )
+    };
+    let last = _mm256_add_pd(
+        z,
+        _mm256_mul_pd(_mm256_sub_pd(n, _mm256_set1_pd(1.0)), step),
+    );
+    let ok = _mm256_and_pd(
+        _mm256_and_pd(_mm256_castsi256_pd(exp_ok), positive),
+        _mm256_and_pd(
+            _mm256_and_pd(not_tie, small),
+            _mm256_and_pd(within(z), within(last)),
+        ),
+    );
+    (step, ok)
+}
+
+/// [`RasterKernel::draw_wide`]: polygons of at most four edges draw four rows at a
+/// time; others go row by row through [`row_span`].
 #[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
 fn draw_wide_avx2(
     kernel: Avx2,
@@ -310,87 +443,143 @@ fn draw_wide_avx2(
     target: &mut DepthTarget<'_>,
     face: u32,
 ) -> SpanCounts {
-    if edges.len() > 4 || rect.is_empty() {
+    match edges.len() {
+        3 => draw_rows4::<3>(kernel, edges, rect, rows, plane, target, face),
+        4 => draw_rows4::<4>(kernel, edges, rect, rows, plane, target, face),
+        _ => draw_rows_by_spans(kernel, edges, rect, rows, plane, target, face),
+    }
+}
+
+/// Rows of a polygon of `E` edges, four at a time, one row per lane.
+///
+/// Per edge the crossing of each row gives a guess `g` of the boundary column, clamped
+/// to the rectangle's columns `[x0, x1]`; the exact test at columns `g - 1` and `g`
+/// confirms it: for an edge whose inside pixels are those at or right of the boundary,
+/// `(g == x0 or not inside(g - 1)) and (g == x1 or inside(g))`, mirrored for the other
+/// direction, and a horizontal edge either holds the whole row or none of it. Each
+/// test is monotonic along the row, so a confirmed `g` is the edge's exact boundary,
+/// and the span is the intersection of the edges' intervals, as [`row_span`] computes
+/// it. A row with an unconfirmed guess (a crossing within rounding of a pixel centre)
+/// takes [`row_span`]. The depth at each span's first pixel is the plane's (the same
+/// operations per lane) and [`linear_runs`] finds the rows drawn in one linear run.
+#[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
+fn draw_rows4<const E: usize>(
+    kernel: Avx2,
+    edges: &[EdgeFunction],
+    rect: PixelRect,
+    rows: Range<u32>,
+    plane: &DepthPlane,
+    target: &mut DepthTarget<'_>,
+    face: u32,
+) -> SpanCounts {
+    let mut c = SpanCounts::default();
+    if edges.len() != E || rect.is_empty() {
         return draw_rows_by_spans(kernel, edges, rect, rows, plane, target, face);
     }
-    // Lanes beyond the polygon's edges hold an edge that every sample is on and
-    // includes: horizontal, always inside.
-    let (mut ox, mut oy, mut dx, mut dy) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
-    let (mut sign, mut thr, mut inv) = ([1.0; 4], [-f64::from_bits(1); 4], [0.0; 4]);
-    for (k, e) in edges.iter().enumerate() {
-        (ox[k], oy[k], dx[k], dy[k], sign[k]) = (e.ox, e.oy, e.dx, e.dy, e.sign);
-        thr[k] = if e.include_zero {
-            -f64::from_bits(1)
-        } else {
-            0.0
-        };
-        inv[k] = 1.0 / e.dy;
+    let mut lanes_of = [EdgeLanes::new(&edges[0]); E];
+    for (l, e) in lanes_of.iter_mut().zip(edges) {
+        *l = EdgeLanes::new(e);
     }
-    let load = |a: &[f64; 4]| _mm256_setr_pd(a[0], a[1], a[2], a[3]);
-    let (ox, oy, dx, dy) = (load(&ox), load(&oy), load(&dx), load(&dy));
-    let (sign, thr, inv) = (load(&sign), load(&thr), load(&inv));
+    let all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
     let zero = _mm256_setzero_pd();
-    // d(inside)/d(px) has the sign of -sign * dy.
-    let slope = _mm256_mul_pd(_mm256_sub_pd(zero, sign), dy);
-    let rising = _mm256_cmp_pd::<_CMP_GT_OQ>(slope, zero);
-    let falling = _mm256_cmp_pd::<_CMP_LT_OQ>(slope, zero);
-    let flat = _mm256_cmp_pd::<_CMP_EQ_OQ>(slope, zero);
-    let (x0, x1) = (f64::from(rect.x0), f64::from(rect.x1));
-    let (lo_x, hi_x) = (_mm256_set1_pd(x0), _mm256_set1_pd(x1));
     let half = _mm256_set1_pd(0.5);
-    let inside = |row: __m256d, px: __m256d| {
-        // EdgeFunction::inside_row: sign * (row - dy * (px - ox)), against 0.
-        let e = _mm256_mul_pd(
-            sign,
-            _mm256_sub_pd(row, _mm256_mul_pd(dy, _mm256_sub_pd(px, ox))),
+    let (x0, x1) = (
+        _mm256_set1_pd(f64::from(rect.x0)),
+        _mm256_set1_pd(f64::from(rect.x1)),
+    );
+    let (z0, pdx, pdy) = (
+        _mm256_set1_pd(plane.z0),
+        _mm256_set1_pd(plane.dzdx),
+        _mm256_set1_pd(plane.dzdy),
+    );
+    let (px0, py0) = (_mm256_set1_pd(plane.x0), _mm256_set1_pd(plane.y0));
+    let mut y = rows.start;
+    while y < rows.end {
+        // Row centres: exact whatever the order of the sums.
+        let py = _mm256_add_pd(
+            _mm256_set1_pd(f64::from(y)),
+            _mm256_setr_pd(0.5, 1.5, 2.5, 3.5),
         );
-        _mm256_cmp_pd::<_CMP_GT_OQ>(e, thr)
-    };
-    let mut c = SpanCounts::default();
-    for y in rows {
-        let py = _mm256_set1_pd(f64::from(y) + 0.5);
-        // EdgeFunction::row_term: dx * (py - oy).
-        let row = _mm256_mul_pd(dx, _mm256_sub_pd(py, oy));
-        let cross = _mm256_add_pd(ox, _mm256_mul_pd(row, inv));
-        let g = _mm256_round_pd::<{ _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC }>(_mm256_sub_pd(
-            cross, half,
-        ));
-        // max/min return their second operand for a NaN guess: x0.
-        let g = _mm256_min_pd(_mm256_max_pd(g, lo_x), hi_x);
-        let before = inside(row, _mm256_sub_pd(g, half));
-        let at = inside(row, _mm256_add_pd(g, half));
-        let at_lo = _mm256_cmp_pd::<_CMP_EQ_OQ>(g, lo_x);
-        let at_hi = _mm256_cmp_pd::<_CMP_EQ_OQ>(g, hi_x);
-        let rise_ok = _mm256_and_pd(
-            _mm256_or_pd(at_lo, _mm256_andnot_pd(before, rising)),
-            _mm256_or_pd(at_hi, at),
-        );
-        let fall_ok = _mm256_and_pd(
-            _mm256_or_pd(at_lo, before),
-            _mm256_or_pd(at_hi, _mm256_andnot_pd(at, falling)),
-        );
-        let ok = _mm256_or_pd(
-            _mm256_or_pd(
-                _mm256_and_pd(rising, rise_ok),
-                _mm256_and_pd(falling, fall_ok),
-            ),
-            _mm256_and_pd(flat, at),
-        );
-        let span = if _mm256_movemask_pd(ok) == 0xf {
-            let lo = _mm256_blendv_pd(lo_x, g, rising);
-            let hi = _mm256_blendv_pd(hi_x, g, falling);
-            let lo = _mm256_max_pd(lo, _mm256_permute4x64_pd::<0b0100_1110>(lo));
-            let lo = _mm256_max_pd(lo, _mm256_permute_pd::<0b0101>(lo));
-            let hi = _mm256_min_pd(hi, _mm256_permute4x64_pd::<0b0100_1110>(hi));
-            let hi = _mm256_min_pd(hi, _mm256_permute_pd::<0b0101>(hi));
-            let (a, b) = (_mm256_cvtsd_f64(lo), _mm256_cvtsd_f64(hi));
-            (a < b).then_some((a as u32, b as u32))
-        } else {
-            row_span(edges, rect, y, rect.x0, rect.x1)
-        };
-        if let Some((a, b)) = span {
-            c.add(target.draw_span(kernel, y, a, b, plane, face));
+        let (mut lo, mut hi, mut ok, mut empty) = (x0, x1, all, zero);
+        for e in &lanes_of {
+            // EdgeFunction::row_term: dx * (py - oy).
+            let row = _mm256_mul_pd(e.dx, _mm256_sub_pd(py, e.oy));
+            let cross = _mm256_add_pd(e.ox, _mm256_mul_pd(row, e.inv_dy));
+            let g = _mm256_round_pd::<{ _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC }>(
+                _mm256_sub_pd(cross, half),
+            );
+            // max returns its second operand for a NaN guess: x0.
+            let g = _mm256_min_pd(_mm256_max_pd(g, x0), x1);
+            let before = e.inside(row, _mm256_sub_pd(g, half));
+            let at = e.inside(row, _mm256_add_pd(g, half));
+            let at_lo = _mm256_cmp_pd::<_CMP_EQ_OQ>(g, x0);
+            let at_hi = _mm256_cmp_pd::<_CMP_EQ_OQ>(g, x1);
+            let rise_ok = _mm256_and_pd(
+                _mm256_or_pd(at_lo, _mm256_andnot_pd(before, all)),
+                _mm256_or_pd(at_hi, at),
+            );
+            let fall_ok = _mm256_and_pd(
+                _mm256_or_pd(at_lo, before),
+                _mm256_or_pd(at_hi, _mm256_andnot_pd(at, all)),
+            );
+            ok = _mm256_and_pd(
+                ok,
+                _mm256_or_pd(
+                    _mm256_or_pd(
+                        _mm256_and_pd(e.rising, rise_ok),
+                        _mm256_and_pd(e.falling, fall_ok),
+                    ),
+                    e.flat,
+                ),
+            );
+            empty = _mm256_or_pd(empty, _mm256_andnot_pd(at, e.flat));
+            lo = _mm256_max_pd(lo, _mm256_blendv_pd(x0, g, e.rising));
+            hi = _mm256_min_pd(hi, _mm256_blendv_pd(x1, g, e.falling));
         }
+        // DepthPlane::at(lo + 0.5, py): z0 + dzdx (px - x0) + dzdy (py - y0), in order.
+        let px = _mm256_add_pd(lo, half);
+        let z = _mm256_add_pd(
+            _mm256_add_pd(z0, _mm256_mul_pd(pdx, _mm256_sub_pd(px, px0))),
+            _mm256_mul_pd(pdy, _mm256_sub_pd(py, py0)),
+        );
+        let (step, run) = linear_runs(z, pdx, _mm256_sub_pd(hi, lo));
+        let (ok, empty, run) = (
+            _mm256_movemask_pd(ok),
+            _mm256_movemask_pd(empty),
+            _mm256_movemask_pd(run),
+        );
+        let (lo, hi, z, step) = (lanes(lo), lanes(hi), lanes(z), lanes(step));
+        for l in 0..4 {
+            let yl = y + l as u32;
+            if yl >= rows.end {
+                break;
+            }
+            if empty & (1 << l) != 0 {
+                continue;
+            }
+            if ok & (1 << l) == 0 {
+                if let Some((a, b)) = row_span(edges, rect, yl, rect.x0, rect.x1) {
+                    c.add(target.draw_span(kernel, yl, a, b, plane, face));
+                }
+                continue;
+            }
+            if lo[l] >= hi[l] {
+                continue;
+            }
+            let (a, b) = (lo[l] as u32, hi[l] as u32);
+            if run & (1 << l) != 0 {
+                let (keys, ids) = target.row_mut(yl);
+                let span = a as usize..b as usize;
+                let written = kernel.depth_test_linear(keys, ids, span, z[l], step[l], face);
+                c.add(SpanCounts {
+                    tested: u64::from(b - a),
+                    written: u64::from(written),
+                });
+            } else {
+                c.add(target.draw_span(kernel, yl, a, b, plane, face));
+            }
+        }
+        y = y.saturating_add(4);
     }
     c
 }
@@ -423,8 +612,11 @@ mod tests {
                 .collect();
             let mut ids: Vec<u32> = (0..n as u32).collect();
             let (mut k2, mut i2) = (keys.clone(), ids.clone());
-            let w1 = k.depth_test_linear(&mut keys, &mut ids, z, step, 99);
-            let w2 = depth_span::depth_test_linear(&mut k2, &mut i2, z, step, 99);
+            // A span inside a longer slice, at its start, middle or end.
+            let a = [0, n / 3, n][round % 3].min(n);
+            let b = (a + rng.next_u64() as usize % (n + 1)).min(n);
+            let w1 = k.depth_test_linear(&mut keys, &mut ids, a..b, z, step, 99);
+            let w2 = depth_span::depth_test_linear(&mut k2[a..b], &mut i2[a..b], z, step, 99);
             assert_eq!((w1, &ids), (w2, &i2));
             for (i, (a, b)) in keys.iter().zip(&k2).enumerate() {
                 assert_eq!(
