@@ -11,7 +11,7 @@ use obscura::{Camera, Error, PrepareOptions, Projection, Result, Scene, Viewport
 #[derive(Args, Debug, Clone)]
 pub struct ViewArgs {
     /// A mesh file (.obj .gltf .glb .stl .ply), a scene file (.toml) or demo:NAME
-    /// (default, seed-task, cube, sphere, city). Without it, demo:default.
+    /// (default, seed-task, cube, sphere, city, triangles). Without it, demo:default.
     #[arg(value_name = "SCENE")]
     pub scene: Option<String>,
     /// Image size in pixels, WIDTHxHEIGHT (each side at most 16384).

@@ -1,20 +1,69 @@
-//! Z-buffer benchmarks.
+//! Z-buffer benchmarks at 1920x1080: the front end (`prepare`) and the z-buffer
+//! separately, on the scenes of the performance targets.
+//!
+//! - `demo:sphere`: 998,000 small triangles (per-triangle cost);
+//! - `demo:city`: 10,000 boxes (medium quads);
+//! - `demo:triangles`: 10,000 large overlapping triangles, about 520 million depth
+//!   tests (fill rate; throughput reported in elements = depth tests);
+//! - Sponza, when `../shared/data/sponza.obj` (relative to the workspace) exists;
+//! - the reference implementation on the city, for comparison.
+//!
+//! Run: `cargo bench -p obscura --bench zbuffer` (threads: `RAYON_NUM_THREADS=1` for
+//! single-thread figures).
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use std::path::Path;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::DVec3;
 use obscura::scene::demo;
-use obscura::surface::{Algorithm, RenderOptions, render};
-use obscura::{PrepareOptions, Viewport, prepare};
+use obscura::surface::{RenderOptions, zbuffer};
+use obscura::{Camera, PrepareOptions, Scene, Viewport, prepare};
+
+fn scenes() -> Vec<(String, Scene, Camera)> {
+    let mut out = Vec::new();
+    for name in ["sphere", "city", "triangles"] {
+        let scene = demo::scene(name).expect("demo scene");
+        let cam = *scene.camera().expect("demo scenes carry a camera");
+        out.push((name.to_string(), scene, cam));
+    }
+    let sponza = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/sponza.obj");
+    if let Ok(scene) = Scene::load(&sponza.to_string_lossy()) {
+        let cam = Camera::perspective(
+            DVec3::new(0.0, -10.0, 2.0),
+            DVec3::new(0.0, 10.0, 4.0),
+            DVec3::Z,
+            60.0,
+            0.05,
+            60.0,
+        );
+        out.push(("sponza".to_string(), scene, cam));
+    }
+    out
+}
 
 fn bench(c: &mut Criterion) {
-    let scene = demo::default_scene();
-    let vp = Viewport::new(640, 480).unwrap();
-    let cam = scene.default_camera(vp.aspect());
-    c.bench_function("zbuffer/default 640x480", |b| {
-        b.iter(|| {
-            let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
-            render(Algorithm::ZBuffer, &view, &RenderOptions::default()).unwrap()
-        })
-    });
+    let vp = Viewport::new(1920, 1080).expect("valid size");
+    let opts = RenderOptions::default();
+    for (name, scene, cam) in scenes() {
+        let mut g = c.benchmark_group(format!("zbuffer/{name} 1920x1080"));
+        g.sample_size(10);
+        g.bench_function("prepare", |b| {
+            b.iter(|| prepare(&scene, &cam, vp, &PrepareOptions::default()).expect("prepared"))
+        });
+        let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).expect("prepared");
+        let (_, stats) = zbuffer::render(&view, &opts).expect("rendered");
+        let tests = stats.get("pixels_tested").unwrap_or(0.0) as u64;
+        g.throughput(Throughput::Elements(tests));
+        g.bench_function("render", |b| {
+            b.iter(|| zbuffer::render(&view, &opts).expect("rendered"))
+        });
+        if name == "city" {
+            g.bench_function("render_reference", |b| {
+                b.iter(|| zbuffer::render_reference(&view, &opts).expect("rendered"))
+            });
+        }
+        g.finish();
+    }
 }
 
 criterion_group!(benches, bench);

@@ -36,7 +36,12 @@ use std::ops::Range;
 
 use super::kernel::RasterKernel;
 
-/// Spans shorter than this are stepped serially: a run costs more to set up than a few
+/// Spans of at most this many pixels go to
+/// [`RasterKernel::depth_test_short`](super::kernel::RasterKernel::depth_test_short):
+/// their keys stepped serially, tested together.
+pub const SHORT_SPAN: usize = 8;
+
+/// Runs shorter than this are stepped serially: a run costs more to set up than a few
 /// dependent additions.
 pub const SERIAL_SPAN: usize = 4;
 
@@ -187,8 +192,8 @@ pub fn depth_test_span<K: RasterKernel>(
 ) -> u32 {
     let (start, end) = (span.start, span.end);
     let n = end.saturating_sub(start);
-    if n < SERIAL_SPAN {
-        return depth_test_serial(&mut keys[start..end], &mut ids[start..end], z, d, face).0;
+    if n <= SHORT_SPAN {
+        return kernel.depth_test_short(keys, ids, span, z, d, face);
     }
     let (mut z, mut k, mut written) = (z, start, 0u32);
     while k < end {

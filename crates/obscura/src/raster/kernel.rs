@@ -95,6 +95,20 @@ pub trait RasterKernel: Copy {
         face: u32,
     ) -> u32;
 
+    /// Depth-tests pixels `span` of the slices, at most [`depth_span::SHORT_SPAN`] of them, with keys
+    /// stepped serially from `z` by `d` (exactly [`depth_span::depth_test_serial`]);
+    /// returns the number of pixels written. Other elements of the slices may be
+    /// rewritten with their own values.
+    fn depth_test_short(
+        self,
+        keys: &mut [f32],
+        ids: &mut [u32],
+        span: Range<usize>,
+        z: f64,
+        d: f64,
+        face: u32,
+    ) -> u32;
+
     /// Draws rows `rows` of a convex polygon whose sample rectangle `rect` is at most
     /// [`NARROW_WIDTH`] pixels wide and which has at most [`NARROW_EDGES`] edges: each
     /// row's covered columns tested together (see [`NarrowEdges`]), then its span
@@ -138,6 +152,19 @@ impl RasterKernel for Portable {
         face: u32,
     ) -> u32 {
         depth_span::depth_test_linear(&mut keys[span.clone()], &mut ids[span], z, step, face)
+    }
+
+    #[inline(always)]
+    fn depth_test_short(
+        self,
+        keys: &mut [f32],
+        ids: &mut [u32],
+        span: Range<usize>,
+        z: f64,
+        d: f64,
+        face: u32,
+    ) -> u32 {
+        depth_span::depth_test_serial(&mut keys[span.clone()], &mut ids[span], z, d, face).0
     }
 
     #[inline(always)]

@@ -19,6 +19,7 @@ use std::arch::x86_64::*;
 
 use std::ops::Range;
 
+use super::depth_span;
 use super::kernel::{
     DepthTarget, RasterKernel, SpanCounts, draw_rows_by_spans, is_narrow, mask_span,
 };
@@ -57,6 +58,20 @@ impl RasterKernel for Avx2 {
     ) -> u32 {
         // SAFETY: an `Avx2` exists only when the processor has the features enabled.
         unsafe { depth_test_linear_avx2(keys, ids, span, z, step, face) }
+    }
+
+    #[inline(always)]
+    fn depth_test_short(
+        self,
+        keys: &mut [f32],
+        ids: &mut [u32],
+        span: Range<usize>,
+        z: f64,
+        d: f64,
+        face: u32,
+    ) -> u32 {
+        // SAFETY: as above.
+        unsafe { depth_test_short_avx2(keys, ids, span, z, d, face) }
     }
 
     #[inline(always)]
@@ -122,6 +137,77 @@ fn keys_eight(z: __m256d, step: __m256d, k0: __m256d, k4: __m256d) -> __m256 {
         _mm256_set_m128(_mm256_cvtpd_ps(b), _mm256_cvtpd_ps(a)),
         _mm256_set1_ps(-0.0),
     )
+}
+
+/// Up to eight pixels with the serial chain of keys: the eight values computed one
+/// after the other as the serial loop does (`z += d`), then tested together, without a
+/// branch on the span's length.
+#[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
+fn depth_test_short_avx2(
+    keys: &mut [f32],
+    ids: &mut [u32],
+    span: Range<usize>,
+    z: f64,
+    d: f64,
+    face: u32,
+) -> u32 {
+    let len = keys.len().min(ids.len());
+    let (start, end) = (span.start.min(len), span.end.min(len));
+    let n = end.saturating_sub(start);
+    if n == 0 {
+        return 0;
+    }
+    if n > 8 {
+        return depth_span::depth_test_serial(
+            &mut keys[start..end],
+            &mut ids[start..end],
+            z,
+            d,
+            face,
+        )
+        .0;
+    }
+    let z1 = z + d;
+    let z2 = z1 + d;
+    let z3 = z2 + d;
+    let z4 = z3 + d;
+    let z5 = z4 + d;
+    let z6 = z5 + d;
+    let z7 = z6 + d;
+    let a = _mm256_setr_pd(z, z1, z2, z3);
+    let b = _mm256_setr_pd(z4, z5, z6, z7);
+    let nk = _mm256_xor_ps(
+        _mm256_set_m128(_mm256_cvtpd_ps(b), _mm256_cvtpd_ps(a)),
+        _mm256_set1_ps(-0.0),
+    );
+    let lanes = _mm256_cmpgt_epi32(
+        _mm256_set1_epi32(n as i32),
+        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+    );
+    let facev = _mm256_set1_epi32(face as i32);
+    if start + 8 <= len {
+        let nk = _mm256_blendv_ps(
+            _mm256_set1_ps(f32::INFINITY),
+            nk,
+            _mm256_castsi256_ps(lanes),
+        );
+        return test_eight(keys, ids, start, nk, facev);
+    }
+    // At the end of the slice: masked loads and stores touch only the span's pixels.
+    let kp = keys[start..].as_mut_ptr();
+    let ip = ids[start..].as_mut_ptr().cast::<i32>();
+    // SAFETY: the pointers are to element `start` of the slices, and the masks enable
+    // only the `n` lanes left in them.
+    unsafe {
+        let old = _mm256_maskload_ps(kp, lanes);
+        let take = _mm256_and_si256(
+            _mm256_castps_si256(_mm256_cmp_ps::<_CMP_LT_OQ>(nk, old)),
+            lanes,
+        );
+        _mm256_maskstore_ps(kp, take, nk);
+        _mm256_maskstore_epi32(ip, take, facev);
+        (_mm256_movemask_ps(_mm256_castsi256_ps(take)) as u32).count_ones()
+    }
 }
 
 #[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
@@ -617,6 +703,11 @@ mod tests {
             let b = (a + rng.next_u64() as usize % (n + 1)).min(n);
             let w1 = k.depth_test_linear(&mut keys, &mut ids, a..b, z, step, 99);
             let w2 = depth_span::depth_test_linear(&mut k2[a..b], &mut i2[a..b], z, step, 99);
+            assert_eq!((w1, &ids), (w2, &i2));
+            // The short kernel on the first (up to) eight of them, with the serial chain.
+            let c = a..b.min(a + 8);
+            let w1 = k.depth_test_short(&mut keys, &mut ids, c.clone(), z, step * 1.1, 7);
+            let w2 = Portable.depth_test_short(&mut k2, &mut i2, c, z, step * 1.1, 7);
             assert_eq!((w1, &ids), (w2, &i2));
             for (i, (a, b)) in keys.iter().zip(&k2).enumerate() {
                 assert_eq!(

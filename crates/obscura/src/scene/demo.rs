@@ -7,6 +7,7 @@
 //! | `cube` | a unit cube | 6 faces |
 //! | `sphere` | a UV sphere of about a million triangles (benchmarks) | 998,000 |
 //! | `city` | 10,000 boxes on a ground plane | 120,001 |
+//! | `triangles` | 10,000 large overlapping triangles (z-buffer fill-rate benchmark) | 10,000 |
 //!
 //! Generators produce counter-clockwise faces seen from outside, so closed ones can be
 //! back-face culled.
@@ -19,7 +20,14 @@ use super::{Camera, Mesh, MeshBuilder, ObjectDesc, Scene};
 use crate::{Error, Result};
 
 /// The names `demo:NAME` accepts.
-pub const NAMES: [&str; 5] = ["default", "seed-task", "cube", "sphere", "city"];
+pub const NAMES: [&str; 6] = [
+    "default",
+    "seed-task",
+    "cube",
+    "sphere",
+    "city",
+    "triangles",
+];
 
 /// A built-in scene by name.
 pub fn scene(name: &str) -> Result<Scene> {
@@ -29,6 +37,7 @@ pub fn scene(name: &str) -> Result<Scene> {
         "cube" => Ok(cube()),
         "sphere" => Ok(sphere(1000, 500)),
         "city" => Ok(city(100, 100, 7)),
+        "triangles" => Ok(overlapping_triangles(10_000, 11)),
         _ => Err(Error::UnknownDemo {
             name: name.to_string(),
             known: NAMES.join(", "),
@@ -331,6 +340,51 @@ pub fn city(nx: u32, nz: u32, seed: u64) -> Scene {
     s
 }
 
+/// `n` large triangles overlapping in front of the camera, at random depths and tilts
+/// so that many interpenetrate: a fill-rate benchmark for image-space algorithms. At
+/// 1920x1080 each covers about 2.5% of the image on average (some 52,000 pixels), so
+/// 10,000 of them make some 520 million depth tests. One open object: no back face is
+/// culled.
+#[must_use]
+pub fn overlapping_triangles(n: usize, seed: u64) -> Scene {
+    let mut rng = SplitMix64(seed);
+    let mut b = MeshBuilder::with_capacity(n * 3, n);
+    for _ in 0..n {
+        let c = DVec3::new(
+            rng.range(-7.0, 7.0),
+            rng.range(-4.0, 4.0),
+            rng.range(-3.0, 3.0),
+        );
+        let r = rng.range(1.0, 3.0);
+        let a0 = rng.range(0.0, TAU);
+        let base = b.vertex_count() as u32;
+        for k in 0..3 {
+            // Three corners roughly a third of a turn apart, each with its own depth.
+            let a = a0 + f64::from(k) * TAU / 3.0 + rng.range(-0.4, 0.4);
+            b.push_position(c + DVec3::new(r * a.cos(), r * a.sin(), rng.range(-1.0, 1.0)));
+        }
+        b.push_face(&[base, base + 1, base + 2], None)
+            .expect("indices in range");
+    }
+    let mut s = Scene::new();
+    s.add(
+        ObjectDesc::new("triangles", b.finish().0)
+            .with_color([0.85, 0.6, 0.3])
+            .with_closed(false)
+            .with_convex(false),
+    )
+    .expect("valid");
+    s.set_camera(Some(Camera::perspective(
+        DVec3::new(0.0, 0.0, 12.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        50.0,
+        1.0,
+        30.0,
+    )));
+    s
+}
+
 /// The default demo: interpenetrating and overlapping solids on a floor.
 #[must_use]
 pub fn default_scene() -> Scene {
@@ -453,6 +507,9 @@ mod tests {
         assert!(matches!(scene("nope"), Err(Error::UnknownDemo { .. })));
         let s = sphere(1000, 500);
         assert_eq!(s.triangle_count(), 998_000);
+        let tris = scene("triangles").unwrap();
+        assert_eq!(tris.triangle_count(), 10_000);
+        assert!(!tris.objects()[0].closed);
         let city = scene("city").unwrap();
         assert_eq!(city.triangle_count(), 10_000 * 12 + 2);
     }

@@ -74,6 +74,7 @@ fn scenes() -> Vec<(&'static str, Scene)> {
         ("sub-pixel triangles", random_triangles(600, 2, 1.0, 0.002)),
         ("mixed triangles", random_triangles(150, 3, 1.0, 0.4)),
         ("huge triangles", random_triangles(12, 4, 0.3, 3.0)),
+        ("overlapping triangles", demo::overlapping_triangles(80, 12)),
         ("slivers", long_thin_triangles(60, 5, 1.0)),
         ("interpenetrating quads", interpenetrating_quads(20, 6, 1.0)),
         ("coplanar grid", coplanar_grid(12, 9, 7)),
