@@ -66,9 +66,50 @@ fn bin(view: &PreparedView<'_>, range: std::ops::Range<usize>, bands: usize) -> 
     lists
 }
 
-/// Draws the view into the frame band by band on `threads` threads, then converts the
-/// keys to depths band by band while they are in cache.
-pub(super) fn draw_parallel(
+/// Whether drawing band by band pays on one thread: when polygons are large (their
+/// boxes average more than [`LARGE_BOX`] pixels, estimated on a sample), each band's
+/// keys and ids stay in cache while many polygons overdraw them; small polygons gain
+/// little and pay the binning and the setup of those that straddle bands.
+pub(super) fn prefers_bands(view: &PreparedView<'_>) -> bool {
+    let n = view.polygon_count();
+    if n == 0 {
+        return false;
+    }
+    let (starts, indices, _) = view.polygon_arrays();
+    let vertices = view.vertices();
+    let vp = view.viewport();
+    let (w, h) = (f64::from(vp.width), f64::from(vp.height));
+    let stride = n.div_ceil(SAMPLE).max(1);
+    let (mut area, mut count) = (0.0, 0usize);
+    for p in (0..n).step_by(stride) {
+        let (s, e) = (starts[p] as usize, starts[p + 1] as usize);
+        let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0.0f64, 0.0f64);
+        for &i in &indices[s..e] {
+            let v = &vertices[i as usize];
+            x0 = x0.min(v.x);
+            y0 = y0.min(v.y);
+            x1 = x1.max(v.x);
+            y1 = y1.max(v.y);
+        }
+        let box_area = (x1.min(w) - x0.max(0.0)).max(0.0) * (y1.min(h) - y0.max(0.0)).max(0.0);
+        if box_area.is_finite() {
+            area += box_area;
+        }
+        count += 1;
+    }
+    area > LARGE_BOX * count as f64
+}
+
+/// Polygons sampled by [`prefers_bands`].
+const SAMPLE: usize = 4096;
+
+/// The mean box area, in pixels, above which one thread draws band by band.
+const LARGE_BOX: f64 = 2048.0;
+
+/// Draws the view into the frame band by band, on `threads` threads when the
+/// `parallel` feature is on (else, or with one thread, in order on this one), converting
+/// each band's keys to depths while they are in cache.
+pub(super) fn draw_banded(
     view: &PreparedView<'_>,
     fill: FillRule,
     kernel: Kernel,
@@ -103,13 +144,13 @@ pub(super) fn draw_parallel(
         c
     };
     #[cfg(feature = "parallel")]
-    {
+    if threads > 1 {
         use rayon::prelude::*;
         let lists: Vec<Vec<Vec<u32>>> = ranges
             .into_par_iter()
             .map(|r| bin(view, r, bands))
             .collect();
-        frame
+        return frame
             .depth
             .par_chunks_mut(rows)
             .zip(frame.ids.par_chunks_mut(rows))
@@ -118,20 +159,17 @@ pub(super) fn draw_parallel(
             .reduce(Counts::default, |mut a, b| {
                 a.add(b);
                 a
-            })
+            });
     }
-    #[cfg(not(feature = "parallel"))]
+    let lists: Vec<Vec<Vec<u32>>> = ranges.into_iter().map(|r| bin(view, r, bands)).collect();
+    let mut total = Counts::default();
+    for (b, (keys, ids)) in frame
+        .depth
+        .chunks_mut(rows)
+        .zip(frame.ids.chunks_mut(rows))
+        .enumerate()
     {
-        let lists: Vec<Vec<Vec<u32>>> = ranges.into_iter().map(|r| bin(view, r, bands)).collect();
-        let mut total = Counts::default();
-        for (b, (keys, ids)) in frame
-            .depth
-            .chunks_mut(rows)
-            .zip(frame.ids.chunks_mut(rows))
-            .enumerate()
-        {
-            total.add(draw(b, keys, ids, &lists));
-        }
-        total
+        total.add(draw(b, keys, ids, &lists));
     }
+    total
 }

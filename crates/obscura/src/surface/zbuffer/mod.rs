@@ -29,7 +29,9 @@
 //! - the kernels compiled for AVX2 or AVX-512 when the processor has them (chosen at
 //!   run time; the same code, so the same results, as the portable build);
 //! - with the `parallel` feature and more than one thread, the image cut into bands of
-//!   rows drawn in parallel, each band drawing its polygons in ascending order.
+//!   rows drawn in parallel, each band drawing its polygons in ascending order; on one
+//!   thread, bands too when the polygons are large (each band's buffers stay in cache
+//!   while the polygons overdraw them).
 
 mod bands;
 mod fast;
@@ -47,17 +49,42 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
     render_with(view, options, Kernel::detect(), bands::thread_count())
 }
 
-/// Renders with a chosen kernel and number of threads (1 draws on the calling thread).
-/// For tests and benchmarks that compare kernels; [`render`] picks the best.
+/// Renders with a chosen kernel and number of threads (1 draws on the calling thread;
+/// more need the `parallel` feature and draw on rayon's current pool). For tests and
+/// benchmarks that compare kernels; [`render`] picks the best.
 pub fn render_with(
     view: &PreparedView<'_>,
     options: &RenderOptions,
     kernel: Kernel,
     threads: usize,
 ) -> Result<(Frame, Stats)> {
+    let schedule = if threads > 1 || bands::prefers_bands(view) {
+        Schedule::Bands
+    } else {
+        Schedule::Whole
+    };
+    render_scheduled(view, options, kernel, threads, schedule)
+}
+
+/// How the frame is cut into units of work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Schedule {
+    /// The whole frame at once: every polygon once, in order.
+    Whole,
+    /// Bands of rows, each with the polygons that reach it, in order.
+    Bands,
+}
+
+fn render_scheduled(
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+    kernel: Kernel,
+    threads: usize,
+    schedule: Schedule,
+) -> Result<(Frame, Stats)> {
     let mut frame = Frame::new(view.viewport())?;
-    let counts = if threads > 1 {
-        bands::draw_parallel(view, options.fill_rule, kernel, threads, &mut frame)
+    let counts = if schedule == Schedule::Bands {
+        bands::draw_banded(view, options.fill_rule, kernel, threads, &mut frame)
     } else {
         let c = fast::draw_all(view, options.fill_rule, kernel, &mut frame);
         fast::keys_to_depths(view.transform(), kernel, &mut frame);

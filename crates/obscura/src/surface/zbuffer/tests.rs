@@ -133,6 +133,12 @@ fn fast_path_equals_reference_on_random_scenes() {
                             format!("{name}, camera {ci}, {fill:?}, {kernel:?}, {threads} threads");
                         assert_same(&fast, &reference, &what);
                     }
+                    for schedule in [Schedule::Whole, Schedule::Bands] {
+                        let fast = render_scheduled(&view, &opts, kernel, 1, schedule).unwrap();
+                        let what =
+                            format!("{name}, camera {ci}, {fill:?}, {kernel:?}, {schedule:?}");
+                        assert_same(&fast, &reference, &what);
+                    }
                 }
             }
         }
