@@ -109,7 +109,7 @@ fn check_order_invariants(tree: &BspTree, vp: Viewpoint) -> usize {
         range[i] = r;
     }
     let mut checked = 0;
-    for i in 0..n {
+    for (i, own) in own.iter().enumerate() {
         let node = tree.node(i as u32);
         let side = vp.side(&node.plane);
         if side == 0.0 {
@@ -122,13 +122,13 @@ fn check_order_invariants(tree: &BspTree, vp: Viewpoint) -> usize {
         };
         if let Some(c) = first {
             assert!(
-                range[c as usize].1 < own[i].0,
+                range[c as usize].1 < own.0,
                 "node {i}: far subtree after the node"
             );
         }
         if let Some(c) = last {
             assert!(
-                own[i].1 < range[c as usize].0,
+                own.1 < range[c as usize].0,
                 "node {i}: near subtree before the node"
             );
         }

@@ -95,7 +95,7 @@ fn assert_pieces_keep_area(view: &PreparedView<'_>, order: &PaintOrder) {
 /// height difference along stick `i + 1` is `a (1.73 + 3.46 l)`, positive for
 /// `|l| < 0.5`): every pair has a plane-test order and only the cycle of the three
 /// forbids painting them. With `roll = 0` the sticks also cross each other's planes
-/// outside their overlap, so the plane tests fail both ways.
+/// outside their overlap, so tests 3 and 4 fail both ways.
 fn cyclic_triple(roll: f64) -> Scene {
     let mut s = Scene::new();
     let (r, half, w, a) = (0.5, 2.0, 0.45, 0.3);
@@ -147,14 +147,20 @@ fn cyclic_overlap_is_broken_by_a_split_and_renders_like_the_zbuffer() {
 }
 
 #[test]
-fn sticks_crossing_each_others_planes_are_split_without_a_cycle() {
+fn cycle_of_sticks_crossing_each_others_planes_is_found_by_the_overlap_depths() {
+    // Without the roll, tests 3 and 4 fail both ways for every pair; the depths over
+    // the overlap order each pair, and the cycle is found and split as before.
     let scene = cyclic_triple(0.0);
     let v = view(&scene, &front_camera(), 160, 160);
-    for algo in VARIANTS {
-        let s = check(&v, algo, 1.0, "crossing sticks");
-        assert!(s.get("splits").unwrap() >= 1.0);
-        assert_eq!(s.get("unresolved"), Some(0.0));
-    }
+    let s = check(&v, Algorithm::DepthSort, 1.0, "crossing sticks");
+    assert!(s.get("swap_overlap_depth").unwrap() >= 1.0);
+    assert!(s.get("cycles").unwrap() >= 1.0);
+    assert!(s.get("splits").unwrap() >= 1.0);
+    assert_eq!(s.get("unresolved"), Some(0.0));
+    let s = check(&v, Algorithm::DepthSortMatrix, 1.0, "crossing sticks");
+    assert!(s.get("decided_overlap_depth").unwrap() >= 3.0);
+    assert!(s.get("cycles_broken").unwrap() >= 1.0);
+    assert_eq!(s.get("unresolved"), Some(0.0));
     assert_pieces_keep_area(&v, &paint_order(&v, &RenderOptions::default()));
 }
 
@@ -291,8 +297,13 @@ fn no_split_when_an_order_exists() {
             ))
             .unwrap();
     }
+    // Separate buildings: their perpendicular walls cross each other's planes, but
+    // never each other.
+    let city = demo::city(6, 6, 3);
+    let city_camera = *city.camera().unwrap();
     let oblique = Camera::perspective(DVec3::new(3., 4., 7.), DVec3::ZERO, DVec3::Y, 45., 0.5, 50.);
     for (name, scene, cam) in [
+        ("city", &city, city_camera),
         ("apart", &apart, front_camera()),
         ("stacked", &stacked, front_camera()),
         ("stacked, oblique", &stacked, oblique),
@@ -471,6 +482,7 @@ fn stats_count_every_comparison_once() {
         "decided_test4",
         "decided_test5",
         "decided_coplanar",
+        "decided_overlap_depth",
     ]
     .iter()
     .map(|k| g(k))

@@ -10,6 +10,8 @@
 //! `A[i] = 0` the covering relation has a cycle, found by walking it, and a face of
 //! the cycle is split by the plane of another.
 
+use std::cmp::Ordering;
+
 use super::Counters;
 use super::work::{TileGrid, WorkSet};
 
@@ -93,7 +95,18 @@ impl Graph<'_> {
         match (i_first, j_first) {
             (true, false) => Relation::CoveredBy,
             (false, true) => Relation::Covers,
-            _ => Relation::Intersect,
+            // Both cross each other's planes: compare depths where they overlap.
+            _ => match ws.nearer_over_overlap(i, j) {
+                Some(Ordering::Greater) => {
+                    c.overlap_depth += 1;
+                    Relation::Covers
+                }
+                Some(_) => {
+                    c.overlap_depth += 1;
+                    Relation::CoveredBy
+                }
+                None => Relation::Intersect,
+            },
         }
     }
 
@@ -153,11 +166,11 @@ impl Graph<'_> {
                             self_split = true;
                             break;
                         }
-                    } else if s.q_spans_p_plane() {
-                        if let Some(pieces) = self.split(j, i, c) {
-                            pending.extend(pieces);
-                            continue;
-                        }
+                    } else if s.q_spans_p_plane()
+                        && let Some(pieces) = self.split(j, i, c)
+                    {
+                        pending.extend(pieces);
+                        continue;
                     }
                     c.unresolved += 1;
                 }
@@ -281,7 +294,7 @@ pub(super) fn sort(
             g.live -= 1;
             paint(g.ws, i);
             done += 1;
-            if done % 4096 == 0 {
+            if done.is_multiple_of(4096) {
                 progress(done as f64 / g.alive.len().max(1) as f64);
             }
             for z in std::mem::take(&mut g.covered_by[k]) {
@@ -296,7 +309,7 @@ pub(super) fn sort(
             continue;
         }
         // No face with A = 0: the relation has a cycle.
-        while scan < g.alive.len() && !(g.alive[scan] && !g.painted[scan]) {
+        while scan < g.alive.len() && (!g.alive[scan] || g.painted[scan]) {
             scan += 1;
         }
         if scan >= g.alive.len() {
@@ -313,12 +326,11 @@ pub(super) fn sort(
                     let b = cycle[(ai + d) % cycle.len()];
                     if g.ws.polys[a as usize].face != g.ws.polys[b as usize].face
                         && g.ws.sides(a, b).p_spans_q_plane()
+                        && let Some(pieces) = g.split(a, b, counters)
                     {
-                        if let Some(pieces) = g.split(a, b, counters) {
-                            g.link_all(pieces.to_vec(), counters);
-                            broken = true;
-                            break 'pairs;
-                        }
+                        g.link_all(pieces.to_vec(), counters);
+                        broken = true;
+                        break 'pairs;
                     }
                 }
             }

@@ -19,18 +19,27 @@
 //!    polygons, then the samples both cover).
 //!
 //! If all fail, tests 3 and 4 are retried with `P` and `Q` swapped; if `Q` may go
-//! first it moves to the head of the list and is marked. A marked polygon that would
-//! have to move again closes a cycle (cyclic overlap), and one polygon of the cycle
-//! is split by the plane of another; polygons that interpenetrate (no order either
-//! way) are split at once: "R is split in two by the plane of Q and the pieces
-//! replace it" (seed 000). Coplanar overlapping polygons are ordered by face id, the
-//! lower painted last, so that it wins exact ties as in the z-buffer.
+//! first it moves to the head of the list and is marked. When tests 3 and 4 fail both
+//! ways (each polygon crosses the other's plane, which does not mean that they
+//! intersect: two perpendicular walls of separate buildings do), the depths over the
+//! overlap of their projections decide (the difference of two depth-key planes is
+//! affine, so its signs at the corners of the convex overlap region tell which is in
+//! front everywhere; seed 003: "the common zone can even be analysed pixel by
+//! pixel"). Only if they cross inside that region do they interpenetrate, and `P` (or
+//! `Q`) is split by the other's plane: "R is split in two by the plane of Q and the
+//! pieces replace it" (seed 000). A marked polygon that would have to move again
+//! closes a cycle (cyclic overlap), and one polygon of the cycle is split by the
+//! plane of another. So splits happen only for cycles and interpenetration. Coplanar
+//! overlapping polygons are ordered by face id, the lower painted last, so that it
+//! wins exact ties as in the z-buffer.
 //!
 //! # Covering matrix ([`render_matrix`], [`paint_order_matrix`])
 //! Seed 003: `M[i][j] = 1` when face `i` covers face `j`, `A[i]` counts the faces `i`
 //! covers, a face with `A[i] = 0` is painted and the faces covering it decremented.
-//! Interpenetrating pairs are split while the relation is built; a cycle of the
-//! relation (no face with `A = 0`) is found by walking it and broken by a split.
+//! The relation of a pair comes from the same tests (extents, planes, overlap
+//! depths); interpenetrating pairs (seed 003's case IV) are split while the relation
+//! is built; a cycle of the relation (no face with `A = 0`) is found by walking it and
+//! broken by a split.
 //! Stored as adjacency lists (the matrix is sparse).
 //!
 //! # Details common to both
@@ -89,6 +98,8 @@ struct Counters {
     swaps: u64,
     swap_test3: u64,
     swap_test4: u64,
+    overlap_depth: u64,
+    swap_overlap_depth: u64,
     cycles: u64,
     splits: u64,
     unresolved: u64,
@@ -157,11 +168,13 @@ fn run(
     }
     stats.set("decided_test5", c.test5 as f64);
     stats.set("decided_coplanar", c.coplanar as f64);
+    stats.set("decided_overlap_depth", c.overlap_depth as f64);
     match variant {
         Variant::Newell => {
             stats.set("swaps", c.swaps as f64);
             stats.set("swap_test3", c.swap_test3 as f64);
             stats.set("swap_test4", c.swap_test4 as f64);
+            stats.set("swap_overlap_depth", c.swap_overlap_depth as f64);
             stats.set("cycles", c.cycles as f64);
         }
         Variant::Matrix => {

@@ -59,7 +59,7 @@ struct Sorter<'w> {
 }
 
 impl Sorter<'_> {
-    fn to_heap(&mut self, i: u32) {
+    fn push_heap(&mut self, i: u32) {
         let k = i as usize;
         self.state[k] = State::InHeap;
         self.marked[k] = false;
@@ -77,7 +77,7 @@ impl Sorter<'_> {
         self.generation.push(0);
         let rect = self.ws.polys[i as usize].rect;
         self.grid.insert(i, &rect);
-        self.to_heap(i);
+        self.push_heap(i);
     }
 
     /// The head of the list, taking the farthest polygon of the heap when the stack
@@ -100,10 +100,10 @@ impl Sorter<'_> {
     /// Moves `q` to the head and marks it.
     fn move_to_head(&mut self, q: u32) {
         let k = q as usize;
-        if self.state[k] == State::InStack {
-            if let Some(pos) = self.stack.iter().position(|&s| s == q) {
-                self.stack.remove(pos);
-            }
+        if self.state[k] == State::InStack
+            && let Some(pos) = self.stack.iter().position(|&s| s == q)
+        {
+            self.stack.remove(pos);
         }
         self.state[k] = State::InStack;
         self.marked[k] = true;
@@ -121,7 +121,7 @@ impl Sorter<'_> {
         self.state[i as usize] = State::Dead;
         for s in std::mem::take(&mut self.stack) {
             if s != i {
-                self.to_heap(s);
+                self.push_heap(s);
             }
         }
         for p in pieces {
@@ -168,8 +168,9 @@ pub(super) fn sort(
             |i| matches!(state[i as usize], State::InHeap | State::InStack),
             &mut candidates,
         );
-        // The first polygon P might hide.
-        let mut blocker: Option<(u32, Sides)> = None;
+        // The first polygon P hides, and whether it may go first (swap) or the two
+        // interpenetrate (split).
+        let mut blocker: Option<(u32, Sides, bool)> = None;
         for &q in &candidates {
             if q == p {
                 continue;
@@ -212,30 +213,44 @@ pub(super) fn sort(
                 counters.test5 += 1;
                 continue;
             }
-            blocker = Some((q, sides));
+            // P may hide Q: can Q go first (tests 3 and 4 with P and Q swapped)?
+            if sides.coplanar() {
+                blocker = Some((q, sides, true));
+                break;
+            }
+            if sides.q_behind_p_plane() {
+                counters.swap_test3 += 1;
+                blocker = Some((q, sides, true));
+                break;
+            }
+            if sides.p_before_q_plane() {
+                counters.swap_test4 += 1;
+                blocker = Some((q, sides, true));
+                break;
+            }
+            // Both cross each other's planes: compare depths where they overlap.
+            match s.ws.nearer_over_overlap(p, q) {
+                Some(Ordering::Less) => {
+                    counters.overlap_depth += 1;
+                    continue;
+                }
+                Some(_) => {
+                    counters.swap_overlap_depth += 1;
+                    blocker = Some((q, sides, true));
+                }
+                None => blocker = Some((q, sides, false)),
+            }
             break;
         }
-        let Some((q, sides)) = blocker else {
+        let Some((q, sides, swapped)) = blocker else {
             s.stack.pop();
             s.state[pk] = State::Painted;
             paint(s.ws, p);
             painted += 1;
-            if painted % 4096 == 0 {
+            if painted.is_multiple_of(4096) {
                 progress(painted as f64 / (s.state.len() as f64).max(1.0));
             }
             continue;
-        };
-        // P may hide Q: can Q go first (the tests with P and Q swapped)?
-        let swapped = if sides.coplanar() {
-            true
-        } else if sides.q_behind_p_plane() {
-            counters.swap_test3 += 1;
-            true
-        } else if sides.p_before_q_plane() {
-            counters.swap_test4 += 1;
-            true
-        } else {
-            false
         };
         if swapped && !s.marked[q as usize] {
             counters.swaps += 1;
@@ -248,7 +263,7 @@ pub(super) fn sort(
                 counters.cycles += 1;
                 split_cycle(&mut s, p, q, &sides, counters)
             } else if sides.p_spans_q_plane() {
-                // Interpenetration (or a cut through a cycle): cut P by Q's plane.
+                // Interpenetration: cut P by Q's plane.
                 s.split(p, q, counters)
             } else if sides.q_spans_p_plane() {
                 s.split(q, p, counters)

@@ -244,13 +244,43 @@ impl WorkSet {
         };
         let (ra, rb) = (ca.rect(), cb.rect());
         for y in ra.y0.max(rb.y0)..ra.y1.min(rb.y1) {
-            if let (Some((a0, a1)), Some((b0, b1))) = (ca.row_span(y), cb.row_span(y)) {
-                if a0.max(b0) < a1.min(b1) {
-                    return true;
-                }
+            if let (Some((a0, a1)), Some((b0, b1))) = (ca.row_span(y), cb.row_span(y))
+                && a0.max(b0) < a1.min(b1)
+            {
+                return true;
             }
         }
         false
+    }
+
+    /// Which of `p` and `q` is nearer where their projections overlap: the region
+    /// both cover (`p`'s projection clipped by `q`'s edges) is convex and the
+    /// difference of their depth keys is affine in screen space, so its signs at the
+    /// region's corners decide. `Greater`: `p` is nearer or level everywhere there;
+    /// `Less`: `q` is; `None`: they cross inside the region (interpenetration), or
+    /// the region is empty to rounding. Seed 003 suggests the same for the common
+    /// zone ("the common zone can even be analysed pixel by pixel").
+    pub fn nearer_over_overlap(&self, p: u32, q: u32) -> Option<std::cmp::Ordering> {
+        let (zp, zq) = (self.depth_plane(p)?, self.depth_plane(q)?);
+        let region = overlap_region(self.vertices(p), self.vertices(q));
+        if region.len() < 3 {
+            return None;
+        }
+        let (mut lo, mut hi, mut scale) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
+        for &(x, y) in &region {
+            let (a, b) = (zp.at(x, y), zq.at(x, y));
+            lo = lo.min(a - b);
+            hi = hi.max(a - b);
+            scale = scale.max(a.abs()).max(b.abs());
+        }
+        let tol = 1e-9 * scale;
+        if lo >= -tol && hi > tol {
+            Some(std::cmp::Ordering::Greater)
+        } else if hi <= tol && lo < -tol {
+            Some(std::cmp::Ordering::Less)
+        } else {
+            None
+        }
     }
 
     /// Splits polygon `i` by `by`'s plane (seed 000: "R is split in two by the plane of
@@ -330,6 +360,45 @@ fn depth_extent(eye: &[DVec3]) -> (f64, f64) {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
             (lo.min(-p.z), hi.max(-p.z))
         })
+}
+
+/// Convex polygon `a` clipped by the edges of convex polygon `b` (Sutherland-Hodgman
+/// in the plane), as screen points.
+fn overlap_region(a: &[ViewVertex], b: &[ViewVertex]) -> Vec<(f64, f64)> {
+    let mut poly: Vec<(f64, f64)> = a.iter().map(|v| (v.x, v.y)).collect();
+    let n = b.len();
+    let mut area2 = 0.0;
+    for k in 0..n {
+        let (p, q) = (&b[k], &b[(k + 1) % n]);
+        area2 += p.x * q.y - q.x * p.y;
+    }
+    if area2 == 0.0 {
+        return Vec::new();
+    }
+    let sign = area2.signum();
+    let mut out = Vec::with_capacity(poly.len() + n);
+    for k in 0..n {
+        let (p, q) = (&b[k], &b[(k + 1) % n]);
+        // Positive inside (left of p -> q for a positive area).
+        let inside = |v: (f64, f64)| sign * ((q.x - p.x) * (v.1 - p.y) - (q.y - p.y) * (v.0 - p.x));
+        out.clear();
+        for i in 0..poly.len() {
+            let (u, w) = (poly[i], poly[(i + 1) % poly.len()]);
+            let (du, dw) = (inside(u), inside(w));
+            if du >= 0.0 {
+                out.push(u);
+            }
+            if (du >= 0.0) != (dw >= 0.0) {
+                let t = du / (du - dw);
+                out.push((u.0 + (w.0 - u.0) * t, u.1 + (w.1 - u.1) * t));
+            }
+        }
+        std::mem::swap(&mut poly, &mut out);
+        if poly.len() < 3 {
+            return Vec::new();
+        }
+    }
+    poly
 }
 
 /// Whether an edge line of convex polygon `a` has all of `b` strictly outside `a`.
