@@ -120,17 +120,22 @@ fn check_order_invariants(tree: &BspTree, vp: Viewpoint) -> usize {
         } else {
             (node.front, node.back)
         };
-        if let Some(c) = first {
-            assert!(
-                range[c as usize].1 < own.0,
-                "node {i}: far subtree after the node"
-            );
-        }
-        if let Some(c) = last {
-            assert!(
-                own.1 < range[c as usize].0,
-                "node {i}: near subtree before the node"
-            );
+        let empty = (usize::MAX, 0usize);
+        let groups = [
+            first.map_or(empty, |c| range[c as usize]),
+            *own,
+            last.map_or(empty, |c| range[c as usize]),
+        ];
+        for a in 0..3 {
+            for b in a + 1..3 {
+                let (ga, gb) = (groups[a], groups[b]);
+                if ga != empty && gb != empty {
+                    assert!(
+                        ga.1 < gb.0,
+                        "node {i}: group {a} (far subtree, node, near subtree) not before group {b}"
+                    );
+                }
+            }
         }
         checked += 1;
     }
@@ -151,13 +156,21 @@ fn traversal_order_holds_from_both_sides_of_every_node() {
             viewpoints.push(Viewpoint::Point(p));
             viewpoints.push(Viewpoint::Direction(p - scene.bounds().center()));
         }
-        // Just in front of and just behind node planes, at a point of the node.
+        // Just in front of and just behind node planes, at a point of the node's
+        // polygon (or of the plane, for an axis-aligned node without polygons).
         let step = (tree.node_count() / 40).max(1);
         for i in (0..tree.node_count()).step_by(step) {
             let node = tree.node(i as u32);
-            let f = tree.node_fragments(i as u32)[0];
-            let c = tree.fragment_points(f).iter().sum::<DVec3>()
-                / tree.fragment_points(f).len() as f64;
+            let c = match tree.node_fragments(i as u32).first() {
+                Some(&f) => {
+                    let pts = tree.fragment_points(f);
+                    pts.iter().sum::<DVec3>() / pts.len() as f64
+                }
+                None => {
+                    let o = scene.bounds().center();
+                    o - node.plane.normal * node.plane.signed_distance(o)
+                }
+            };
             let delta = node.plane.normal * (1e-6 * scale);
             for p in [c + delta, c - delta] {
                 let vp = Viewpoint::Point(p);
@@ -515,4 +528,43 @@ fn bad_and_degenerate_input_gives_background() {
     let tree = BspTree::build(&one, &BspOptions::default()).unwrap();
     let v = view(&scene, &cam, 16, 12);
     assert!(bsp::render_with_tree(&tree, &v, &RenderOptions::default()).is_err());
+}
+
+#[test]
+fn axis_planes_keep_the_tree_of_a_convex_object_shallow() {
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("sphere", demo::uv_sphere_mesh(1.0, 48, 24)))
+        .unwrap();
+    // 48 x 22 planar quads (two coplanar triangles each) and 2 x 48 pole triangles.
+    let planes = 48 * 22 + 2 * 48;
+    assert_eq!(s.face_count(), 48 * 22 * 2 + 2 * 48);
+    // Every face's plane has the whole sphere behind it: the autopartition is a chain
+    // of one plane per node, without a split.
+    let chain = BspTree::build(&s, &BspOptions::default().with_axis_planes(false)).unwrap();
+    assert_eq!(chain.stats().splits, 0);
+    assert_eq!(chain.stats().depth, planes);
+    let n = planes;
+    let tree = BspTree::build(&s, &BspOptions::default()).unwrap();
+    assert!(tree.stats().depth < n / 10, "depth {}", tree.stats().depth);
+    let empty_nodes = (0..tree.node_count() as u32)
+        .filter(|&i| tree.node_fragments(i).is_empty())
+        .count();
+    assert!(empty_nodes > 0);
+    for vp in [
+        Viewpoint::Point(DVec3::new(0.3, 2.0, 2.5)),
+        Viewpoint::Point(DVec3::new(0.1, -0.2, 0.3)),
+        Viewpoint::Direction(DVec3::new(-1.0, 0.5, 0.2)),
+    ] {
+        assert!(check_order_invariants(&tree, vp) > 0);
+    }
+    let cam = Camera::perspective(
+        DVec3::new(0.5, 1.5, 3.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        50.,
+        0.1,
+        20.,
+    );
+    let v = view(&s, &cam, 80, 60);
+    both_traversals(&v, 1.0, "sphere");
 }

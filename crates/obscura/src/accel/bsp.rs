@@ -25,6 +25,11 @@
 //!   side. The lowest score wins. A large split weight gives fewer fragments and a
 //!   deeper tree; a large balance weight a shallower tree with more fragments (seed:
 //!   "a plane that divides the scene into two parts of about the same cardinality").
+//!   With [`BspOptions::axis_planes`], sets of 64 polygons or more also score an
+//!   axis-aligned plane through the median of the polygons' first vertices along the
+//!   longest side of their box: a convex object has no balancing plane of its own
+//!   (each face's plane leaves all the others on one side), so without it the tree
+//!   of a sphere is a chain. Such a node may hold no polygon.
 //! - Coplanar polygons (within the tolerance) stay in the node, both facings, sorted
 //!   by descending face id: painting them in that order makes the lower id win
 //!   exact ties, as the z-buffer does.
@@ -103,11 +108,16 @@ pub struct BspOptions {
     /// Distance below which a point counts as on a plane, relative to the largest
     /// absolute world coordinate of the scene.
     pub tolerance: f64,
+    /// Whether an axis-aligned plane through the median of the polygons' centres is a
+    /// candidate too (for sets of at least 64 polygons). Without it, a tree of convex
+    /// objects is a chain as deep as their face count: every face's plane has all
+    /// the other faces of its object on one side.
+    pub axis_planes: bool,
 }
 
 impl BspOptions {
-    /// 8 candidates, split weight 8, balance weight 1, scored against up to 2048
-    /// polygons, front-to-back rendering.
+    /// 8 candidates plus an axis-aligned plane, split weight 8, balance weight 1,
+    /// scored against up to 2048 polygons, front-to-back rendering.
     pub const DEFAULT: BspOptions = BspOptions {
         candidates: 8,
         split_weight: 8.0,
@@ -116,6 +126,7 @@ impl BspOptions {
         traversal: BspTraversal::FrontToBack,
         seed: 0x0B5C_0BA5_EED5,
         tolerance: 1e-9,
+        axis_planes: true,
     };
 
     /// These options with other weights.
@@ -144,6 +155,13 @@ impl BspOptions {
     #[must_use]
     pub fn with_traversal(mut self, traversal: BspTraversal) -> Self {
         self.traversal = traversal;
+        self
+    }
+
+    /// These options with or without axis-aligned candidate planes.
+    #[must_use]
+    pub fn with_axis_planes(mut self, axis_planes: bool) -> Self {
+        self.axis_planes = axis_planes;
         self
     }
 
@@ -253,10 +271,11 @@ pub struct Fragment {
     len: u32,
 }
 
-/// A node: a plane, the fragments lying in it, and two subtrees.
+/// A node: a plane, the fragments lying in it (none for an axis-aligned plane that
+/// meets no polygon), and two subtrees.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BspNode {
-    /// The splitting plane (that of the fragment chosen as splitter).
+    /// The splitting plane (that of the fragment chosen as splitter, or axis-aligned).
     pub plane: Plane,
     /// The subtree on the plane's positive side.
     pub front: Option<u32>,
@@ -312,6 +331,16 @@ pub struct BspTree {
     face_count: u32,
     eps: f64,
     stats: BspBuildStats,
+}
+
+/// Sets smaller than this get no axis-aligned candidate plane.
+const AXIS_PLANE_MIN_SET: usize = 64;
+
+/// A node's splitting plane: a polygon's (index in the node's set) or an
+/// axis-aligned one.
+enum Splitter {
+    Polygon(usize),
+    Axis(Plane),
 }
 
 /// Where a fragment lies relative to a plane.
@@ -420,17 +449,19 @@ impl BspTree {
         let mut stack: Vec<(u32, Vec<u32>, u32)> = vec![(0, all, 1)];
         let mut points = Vec::new();
         while let Some((n, set, depth)) = stack.pop() {
-            let splitter = set[self.choose_splitter(&set, options, &mut rng)];
-            let (plane, eps) = {
-                let f = &self.fragments[splitter as usize];
-                (f.plane, self.eps + f.thickness)
+            let (plane, eps, splitter) = match self.choose_splitter(&set, options, &mut rng) {
+                Splitter::Polygon(i) => {
+                    let f = &self.fragments[set[i] as usize];
+                    (f.plane, self.eps + f.thickness, Some(set[i]))
+                }
+                Splitter::Axis(plane) => (plane, self.eps, None),
             };
-            // The splitter stays in its node whatever its own vertices say (a slightly
-            // non-planar quad must not be cut by its own plane).
-            let mut on = vec![splitter];
+            // A polygon splitter stays in its node whatever its own vertices say (a
+            // slightly non-planar quad must not be cut by its own plane).
+            let mut on: Vec<u32> = splitter.into_iter().collect();
             let (mut front, mut back) = (Vec::new(), Vec::new());
             for &f in &set {
-                if f == splitter {
+                if Some(f) == splitter {
                     continue;
                 }
                 match self.classify(f, &plane, eps) {
@@ -474,11 +505,11 @@ impl BspTree {
         }
     }
 
-    /// The index in `set` of the chosen splitter (see the module doc for the score).
-    fn choose_splitter(&self, set: &[u32], options: &BspOptions, rng: &mut SplitMix64) -> usize {
+    /// The chosen splitter (see the module doc for the score).
+    fn choose_splitter(&self, set: &[u32], options: &BspOptions, rng: &mut SplitMix64) -> Splitter {
         let n = set.len();
         if n <= 2 {
-            return 0;
+            return Splitter::Polygon(0);
         }
         let k = options.candidates.max(1);
         let candidates: Vec<usize> = if n <= k {
@@ -488,39 +519,99 @@ impl BspTree {
                 .map(|_| (rng.next_u64() % n as u64) as usize)
                 .collect()
         };
-        if candidates.len() == 1 {
-            return candidates[0];
+        let axis = (options.axis_planes && n >= AXIS_PLANE_MIN_SET)
+            .then(|| self.median_plane(set))
+            .flatten();
+        if candidates.len() == 1 && axis.is_none() {
+            return Splitter::Polygon(candidates[0]);
         }
         let sample = if options.score_sample == 0 || n <= options.score_sample {
             n
         } else {
             options.score_sample
         };
-        let mut best = (f64::INFINITY, 0usize);
-        for &c in &candidates {
-            let f = &self.fragments[set[c] as usize];
-            let (plane, eps) = (f.plane, self.eps + f.thickness);
+        let score = |plane: &Plane, eps: f64, skip: usize| {
             let (mut front, mut back, mut spans) = (0u64, 0u64, 0u64);
             for s in 0..sample {
                 // Evenly spaced over the set: s * n / sample, in integers.
                 let i = (s as u128 * n as u128 / sample as u128) as usize;
-                if i == c {
+                if i == skip {
                     continue;
                 }
-                match self.classify(set[i], &plane, eps) {
+                match self.classify(set[i], plane, eps) {
                     Side::Front => front += 1,
                     Side::Back => back += 1,
                     Side::Spanning => spans += 1,
                     Side::On => {}
                 }
             }
-            let score = options.split_weight * spans as f64
-                + options.balance_weight * (front as f64 - back as f64).abs();
-            if score < best.0 {
-                best = (score, c);
+            options.split_weight * spans as f64
+                + options.balance_weight * (front as f64 - back as f64).abs()
+        };
+        let mut best = (f64::INFINITY, 0usize);
+        for &c in &candidates {
+            let f = &self.fragments[set[c] as usize];
+            let s = score(&f.plane, self.eps + f.thickness, c);
+            if s < best.0 {
+                best = (s, c);
             }
         }
-        best.1
+        if let Some(plane) = axis
+            && score(&plane, self.eps, usize::MAX) < best.0
+            && self.divides(set, &plane)
+        {
+            return Splitter::Axis(plane);
+        }
+        Splitter::Polygon(best.1)
+    }
+
+    /// The plane perpendicular to the longest side of the box of the polygons'
+    /// first vertices, through their median along it.
+    fn median_plane(&self, set: &[u32]) -> Option<Plane> {
+        let first = |f: u32| {
+            let v = self.fragment_vertices[self.fragments[f as usize].start as usize];
+            self.vertices[v as usize].world
+        };
+        let (lo, hi) = set
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &f| {
+                (lo.min(first(f)), hi.max(first(f)))
+            });
+        let extent = hi - lo;
+        let axis = if extent.x >= extent.y && extent.x >= extent.z {
+            0
+        } else if extent.y >= extent.z {
+            1
+        } else {
+            2
+        };
+        if !(extent[axis] > 0.0) {
+            return None;
+        }
+        let mut coords: Vec<f64> = set.iter().map(|&f| first(f)[axis]).collect();
+        let mid = coords.len() / 2;
+        let (_, &mut median, _) = coords.select_nth_unstable_by(mid, f64::total_cmp);
+        let mut normal = DVec3::ZERO;
+        normal[axis] = 1.0;
+        Some(Plane { normal, d: -median })
+    }
+
+    /// Whether a plane without a polygon of its own leaves fewer polygons on each side
+    /// than the set has (else the recursion would not end).
+    fn divides(&self, set: &[u32], plane: &Plane) -> bool {
+        let (mut front, mut back) = (0usize, 0usize);
+        for &f in set {
+            match self.classify(f, plane, self.eps) {
+                Side::Front => front += 1,
+                Side::Back => back += 1,
+                Side::Spanning => {
+                    front += 1;
+                    back += 1;
+                }
+                Side::On => {}
+            }
+        }
+        front < set.len() && back < set.len()
     }
 
     fn classify(&self, f: u32, plane: &Plane, eps: f64) -> Side {

@@ -7,10 +7,11 @@
 //!   polygon is painted last).
 //! - [`PaintMode::WriteOnce`]: a pixel is written only if nothing has been painted there
 //!   yet (front to back: the first polygon to reach a pixel is the nearest). The painter
-//!   counts uncovered pixels per row and in total, skips full rows without computing
-//!   their spans, and reports when every pixel is covered so the caller can stop (seed
-//!   000, "Αλγόριθμος Ταξινόμησης Κατά Βάθος (5)": "drawing stops when every pixel of
-//!   the image has been covered at least once").
+//!   counts uncovered pixels per 8x8 block and in total, skips polygons whose box lies
+//!   in full blocks and rows of full blocks without computing their spans, and reports
+//!   when every pixel is covered so the caller can stop (seed 000, "Αλγόριθμος
+//!   Ταξινόμησης Κατά Βάθος (5)": "drawing stops when every pixel of the image has been
+//!   covered at least once").
 //!
 //! Coverage is [`PolygonCoverage`] (the shared top-left rule), so the painted pixels are
 //! exactly those the z-buffer would consider for the same polygon. The depth written
@@ -39,9 +40,12 @@ pub(crate) struct Painter {
     transform: ViewTransform,
     fill: FillRule,
     mode: PaintMode,
-    /// Unpainted pixels per row (write-once mode).
-    row_uncovered: Vec<u32>,
+    /// Unpainted pixels per block of `BLOCK x BLOCK` pixels (write-once mode).
+    block_uncovered: Vec<u16>,
+    blocks_x: usize,
     uncovered: u64,
+    /// Polygons skipped because every block under their box was full.
+    pub polygons_occluded: u64,
     /// Polygons that covered at least one pixel sample.
     pub polygons_painted: u64,
     /// Pixel writes.
@@ -50,18 +54,32 @@ pub(crate) struct Painter {
     keyed: Vec<(f64, f64, f64)>,
 }
 
+/// Side of the coverage blocks of write-once painting, in pixels.
+const BLOCK: u32 = 8;
+
 impl Painter {
     /// A background frame for the view.
     pub fn new(view: &PreparedView<'_>, fill: FillRule, mode: PaintMode) -> Result<Self> {
         let vp = view.viewport();
         let frame = Frame::new(vp)?;
+        let (bx, by) = (vp.width.div_ceil(BLOCK), vp.height.div_ceil(BLOCK));
+        let mut block_uncovered = Vec::with_capacity((bx * by) as usize);
+        for j in 0..by {
+            let h = BLOCK.min(vp.height - j * BLOCK);
+            for i in 0..bx {
+                let w = BLOCK.min(vp.width - i * BLOCK);
+                block_uncovered.push((w * h) as u16);
+            }
+        }
         Ok(Painter {
             frame,
             transform: *view.transform(),
             fill,
             mode,
-            row_uncovered: vec![vp.width; vp.height as usize],
+            block_uncovered,
+            blocks_x: bx as usize,
             uncovered: vp.pixel_count() as u64,
+            polygons_occluded: 0,
             polygons_painted: 0,
             pixels_written: 0,
             screen: Vec::new(),
@@ -90,10 +108,23 @@ impl Painter {
         n
     }
 
+    /// Whether every block of block row `by` between block columns `bx0..bx1` is full.
+    fn blocks_full(&self, by: u32, bx0: u32, bx1: u32) -> bool {
+        let row = by as usize * self.blocks_x;
+        self.block_uncovered[row + bx0 as usize..row + bx1 as usize]
+            .iter()
+            .all(|&n| n == 0)
+    }
+
     /// Paints a convex polygon given by screen points, with depth keys from `plane`.
     /// Returns the number of pixels written.
     pub fn paint(&mut self, screen: &[(f64, f64)], plane: &DepthPlane, face: u32) -> u64 {
         let (w, h) = (self.frame.width, self.frame.height);
+        let once = self.mode == PaintMode::WriteOnce;
+        if once && self.occluded(screen) {
+            self.polygons_occluded += 1;
+            return 0;
+        }
         let Some(coverage) = PolygonCoverage::new(screen, self.fill, w, h) else {
             return 0;
         };
@@ -101,8 +132,9 @@ impl Painter {
         let mut written = 0u64;
         let mut any = false;
         let r = coverage.rect();
+        let (bx0, bx1) = (r.x0 / BLOCK, (r.x1 - 1) / BLOCK + 1);
         for y in r.y0..r.y1 {
-            if self.mode == PaintMode::WriteOnce && self.row_uncovered[y as usize] == 0 {
+            if once && self.blocks_full(y / BLOCK, bx0, bx1) {
                 continue;
             }
             let Some((x0, x1)) = coverage.row_span(y) else {
@@ -112,24 +144,59 @@ impl Painter {
             let row = y as usize * width;
             let mut z = plane.at(f64::from(x0) + 0.5, f64::from(y) + 0.5);
             let mut row_written = 0u32;
-            for x in x0 as usize..x1 as usize {
-                let k = row + x;
-                if self.mode == PaintMode::Overwrite || self.frame.ids[k] == BACKGROUND {
+            if once {
+                let block_row = (y / BLOCK) as usize * self.blocks_x;
+                for x in x0..x1 {
+                    let k = row + x as usize;
+                    if self.frame.ids[k] == BACKGROUND {
+                        self.frame.ids[k] = face;
+                        self.frame.depth[k] =
+                            self.transform.depth_of_zq(f64::from(z as f32)) as f32;
+                        self.block_uncovered[block_row + (x / BLOCK) as usize] -= 1;
+                        row_written += 1;
+                    }
+                    z += plane.dzdx;
+                }
+                self.uncovered -= u64::from(row_written);
+            } else {
+                for k in row + x0 as usize..row + x1 as usize {
                     self.frame.ids[k] = face;
                     self.frame.depth[k] = self.transform.depth_of_zq(f64::from(z as f32)) as f32;
-                    row_written += 1;
+                    z += plane.dzdx;
                 }
-                z += plane.dzdx;
-            }
-            if self.mode == PaintMode::WriteOnce {
-                self.row_uncovered[y as usize] -= row_written;
-                self.uncovered -= u64::from(row_written);
+                row_written = x1 - x0;
             }
             written += u64::from(row_written);
         }
         self.polygons_painted += u64::from(any);
         self.pixels_written += written;
         written
+    }
+
+    /// Whether every block under the polygon's bounding box is already full (a
+    /// conservative test: the box is widened to whole pixels).
+    fn occluded(&self, screen: &[(f64, f64)]) -> bool {
+        let (mut minx, mut miny, mut maxx, mut maxy) = (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for &(x, y) in screen {
+            minx = minx.min(x);
+            maxx = maxx.max(x);
+            miny = miny.min(y);
+            maxy = maxy.max(y);
+        }
+        if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
+            return false;
+        }
+        let (w, h) = (f64::from(self.frame.width), f64::from(self.frame.height));
+        let clamp = |v: f64, hi: f64| v.clamp(0.0, hi - 1.0) as u32;
+        let (x0, x1) = (clamp(minx.floor(), w), clamp(maxx.ceil(), w));
+        let (y0, y1) = (clamp(miny.floor(), h), clamp(maxy.ceil(), h));
+        let (bx0, bx1) = (x0 / BLOCK, x1 / BLOCK + 1);
+        (y0 / BLOCK..=y1 / BLOCK).all(|by| self.blocks_full(by, bx0, bx1))
     }
 
     /// The painted frame.
@@ -162,6 +229,25 @@ mod tests {
     }
 
     #[test]
+    fn write_once_skips_full_blocks_only() {
+        // A 20x12 image: blocks of 8 make a 3x2 grid with partial blocks at the edges.
+        let scene = Scene::new();
+        let view = empty_view(&scene, 20, 12);
+        let mut once = Painter::new(&view, FillRule::TopLeft, PaintMode::WriteOnce).unwrap();
+        let left = [(0.0, 0.0), (8.0, 0.0), (8.0, 12.0), (0.0, 12.0)];
+        assert_eq!(once.paint(&left, &flat(0.5), 1), 96);
+        // Inside the full left blocks: skipped.
+        let inner = [(1.0, 1.0), (7.0, 1.0), (7.0, 11.0)];
+        assert_eq!(once.paint(&inner, &flat(0.9), 2), 0);
+        assert_eq!(once.polygons_occluded, 1);
+        // Reaching one pixel into the next block: painted there only.
+        let reach = [(1.0, 1.0), (9.0, 1.0), (9.0, 2.0), (1.0, 2.0)];
+        assert_eq!(once.paint(&reach, &flat(0.9), 3), 1);
+        let f = once.finish();
+        assert_eq!((f.id(8, 1), f.id(7, 1), f.id(9, 1)), (3, 1, BACKGROUND));
+    }
+
+    #[test]
     fn overwrite_keeps_the_last_and_write_once_the_first() {
         let scene = Scene::new();
         let view = empty_view(&scene, 8, 8);
@@ -180,6 +266,10 @@ mod tests {
         let full = [(0.0, 0.0), (8.0, 0.0), (8.0, 8.0), (0.0, 8.0)];
         assert_eq!(once.paint(&full, &flat(0.5), 3), 64 - 56);
         assert!(once.is_complete());
+        // Everything under a full image is occluded without computing its coverage.
+        assert_eq!(once.paint(&b, &flat(0.9), 4), 0);
+        assert_eq!(once.polygons_occluded, 1);
+        assert_eq!(once.polygons_painted, 3);
         let f = once.finish();
         assert_eq!((f.id(3, 3), f.id(7, 7), f.id(7, 0)), (1, 2, 3));
         // The orthographic key 0.5 maps to the middle of [near, far].
