@@ -140,6 +140,7 @@ impl Graph<'_> {
             self.grid.query(
                 &rect,
                 |j| alive[j as usize] && !painted[j as usize],
+                |_| false,
                 &mut cands,
             );
         }
@@ -191,7 +192,7 @@ impl Graph<'_> {
         }
         self.linked[i as usize] = true;
         let rect = self.ws.polys[i as usize].rect;
-        self.grid.insert(i, &rect);
+        self.grid.insert(i, &rect, |_| 0.0);
         if self.covering[i as usize] == 0 {
             self.ready.push(i);
         }
@@ -254,6 +255,7 @@ pub(super) fn sort(
 ) {
     let n = ws.polys.len();
     let (w, h) = ws.size();
+    let grid = TileGrid::for_polygons(w, h, &ws.polys);
     let mut g = Graph {
         ws,
         alive: Vec::with_capacity(n),
@@ -262,7 +264,7 @@ pub(super) fn sort(
         covering: Vec::with_capacity(n),
         covers: Vec::with_capacity(n),
         covered_by: Vec::with_capacity(n),
-        grid: TileGrid::new(w, h, super::TILE),
+        grid,
         ready: Vec::new(),
         split_budget: super::split_budget(n),
         candidates: Vec::new(),

@@ -51,8 +51,11 @@
 //!   screen position, and both pieces share the new ones (watertight).
 //! - Painting: back to front, overwriting ([`crate::raster::PolygonCoverage`], the
 //!   shared top-left rule); pieces use their original polygon's depth-key plane.
-//! - Candidates: a grid of screen tiles lists the polygons touching each tile, so a
-//!   polygon is compared only with polygons whose boxes may overlap its own.
+//! - Candidates: a grid of screen tiles (about twice the median polygon box) lists
+//!   the polygons touching each tile, so a polygon is compared only with polygons
+//!   whose boxes may overlap its own; for Newell's variant each tile lists them
+//!   farthest first and the scan of a tile stops at the first polygon entirely nearer
+//!   than `P` (the depth-extent test, without looking at the rest).
 //! - Tolerance: a vertex within 1e-9 of the largest eye coordinate (plus the
 //!   polygon's own non-planarity) of a plane counts as on it.
 //! - Complexity: O(P log P) for the sort and O(P k) for k overlapping candidates per
@@ -73,9 +76,6 @@ use crate::view::{PreparedView, ViewVertex};
 use crate::{Frame, Result};
 
 use work::WorkSet;
-
-/// Tile size of the candidate grid, in pixels.
-const TILE: u32 = 32;
 
 /// The number of splits allowed for `n` polygons before conflicts are left
 /// unresolved (a guard against endless splitting on degenerate input).

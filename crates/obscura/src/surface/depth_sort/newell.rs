@@ -71,12 +71,18 @@ impl Sorter<'_> {
         });
     }
 
+    /// Adds polygon `i` (the next index) to the list and the grid, whose tiles keep
+    /// their polygons farthest first.
     fn add(&mut self, i: u32) {
-        self.state.push(State::Dead);
-        self.marked.push(false);
-        self.generation.push(0);
-        let rect = self.ws.polys[i as usize].rect;
-        self.grid.insert(i, &rect);
+        let k = i as usize;
+        if self.state.len() <= k {
+            self.state.resize(k + 1, State::Dead);
+            self.marked.resize(k + 1, false);
+            self.generation.resize(k + 1, 0);
+        }
+        let rect = self.ws.polys[k].rect;
+        let polys = &self.ws.polys;
+        self.grid.insert(i, &rect, |j| -polys[j as usize].dmax);
         self.push_heap(i);
     }
 
@@ -141,6 +147,7 @@ pub(super) fn sort(
 ) {
     let n = ws.polys.len();
     let (w, h) = ws.size();
+    let grid = TileGrid::for_polygons(w, h, &ws.polys);
     let mut s = Sorter {
         ws,
         state: Vec::with_capacity(n),
@@ -148,10 +155,17 @@ pub(super) fn sort(
         generation: Vec::with_capacity(n),
         heap: BinaryHeap::with_capacity(n),
         stack: Vec::new(),
-        grid: TileGrid::new(w, h, super::TILE),
+        grid,
         split_budget: super::split_budget(n),
     };
-    for i in 0..n as u32 {
+    // Farthest first, so that every tile's list is built by appending.
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    order.sort_by(|&a, &b| {
+        s.ws.polys[b as usize]
+            .dmax
+            .total_cmp(&s.ws.polys[a as usize].dmax)
+    });
+    for i in order {
         s.add(i);
     }
     let mut candidates = Vec::new();
@@ -162,10 +176,13 @@ pub(super) fn sort(
             let pp = &s.ws.polys[pk];
             (pp.rect, pp.dmin, pp.face)
         };
-        let state = &s.state;
+        let (state, polys) = (&s.state, &s.ws.polys);
+        // Test 0 in the grid: a tile's polygons come farthest first, so the scan of a
+        // tile ends at the first one entirely nearer than P.
         s.grid.query(
             &prect,
             |i| matches!(state[i as usize], State::InHeap | State::InStack),
+            |i| polys[i as usize].dmax < pdmin,
             &mut candidates,
         );
         // The first polygon P hides, and whether it may go first (swap) or the two

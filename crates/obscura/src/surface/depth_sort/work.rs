@@ -457,6 +457,7 @@ pub(super) struct TileGrid {
 impl TileGrid {
     /// Tiles of `tile` pixels over a `width x height` image.
     pub fn new(width: u32, height: u32, tile: u32) -> Self {
+        let tile = tile.max(1);
         let columns = width.div_ceil(tile).max(1);
         let rows = height.div_ceil(tile).max(1);
         TileGrid {
@@ -467,6 +468,24 @@ impl TileGrid {
             seen: Vec::new(),
             stamp: 0,
         }
+    }
+
+    /// A grid whose tiles are about twice the typical polygon box (the median side),
+    /// a power of two from 8 to 128 pixels: small enough that a tile holds few
+    /// polygons, large enough that a polygon touches few tiles.
+    pub fn for_polygons(width: u32, height: u32, polys: &[Poly]) -> Self {
+        let mut sides: Vec<u32> = polys
+            .iter()
+            .map(|p| (p.rect.x1 - p.rect.x0).max(p.rect.y1 - p.rect.y0))
+            .collect();
+        let tile = if sides.is_empty() {
+            32
+        } else {
+            let mid = sides.len() / 2;
+            let (_, &mut median, _) = sides.select_nth_unstable(mid);
+            (2 * median).next_power_of_two().clamp(8, 128)
+        };
+        Self::new(width, height, tile)
     }
 
     fn tiles(&self, r: &PixelRect) -> (u32, u32, u32, u32) {
@@ -481,20 +500,35 @@ impl TileGrid {
         )
     }
 
-    /// Registers polygon `i` with pixel box `r`.
-    pub fn insert(&mut self, i: u32, r: &PixelRect) {
+    /// Registers polygon `i` with pixel box `r`, keeping every tile's list in
+    /// ascending `key` order (ties: later insertions last).
+    pub fn insert(&mut self, i: u32, r: &PixelRect, key: impl Fn(u32) -> f64) {
         let (tx0, ty0, tx1, ty1) = self.tiles(r);
+        let k = key(i);
         for ty in ty0..ty1 {
             for tx in tx0..tx1 {
-                self.cells[(ty * self.columns + tx) as usize].push(i);
+                let cell = &mut self.cells[(ty * self.columns + tx) as usize];
+                if cell.last().is_none_or(|&j| key(j) <= k) {
+                    cell.push(i);
+                } else {
+                    let at = cell.partition_point(|&j| key(j) <= k);
+                    cell.insert(at, i);
+                }
             }
         }
     }
 
     /// The polygons registered in the tiles `r` touches for which `alive` holds, each
-    /// once, into `out`. Entries for which `alive` is false are dropped from the tiles
-    /// (they never come back).
-    pub fn query(&mut self, r: &PixelRect, alive: impl Fn(u32) -> bool, out: &mut Vec<u32>) {
+    /// once, into `out`. In each tile the scan stops at the first polygon for which
+    /// `stop` holds (lists are in key order, so a bound on the key ends a tile).
+    /// Entries for which `alive` is false are dropped from the tiles scanned.
+    pub fn query(
+        &mut self,
+        r: &PixelRect,
+        alive: impl Fn(u32) -> bool,
+        stop: impl Fn(u32) -> bool,
+        out: &mut Vec<u32>,
+    ) {
         out.clear();
         self.stamp = self.stamp.wrapping_add(1);
         if self.stamp == 0 {
@@ -505,8 +539,20 @@ impl TileGrid {
         for ty in ty0..ty1 {
             for tx in tx0..tx1 {
                 let cell = &mut self.cells[(ty * self.columns + tx) as usize];
-                cell.retain(|&i| alive(i));
-                for &i in cell.iter() {
+                // Drop dead entries from the part scanned, keeping the order.
+                let mut keep = 0;
+                let mut scan = 0;
+                while scan < cell.len() {
+                    let i = cell[scan];
+                    scan += 1;
+                    if !alive(i) {
+                        continue;
+                    }
+                    cell[keep] = i;
+                    keep += 1;
+                    if stop(i) {
+                        break;
+                    }
                     let k = i as usize;
                     if k >= self.seen.len() {
                         self.seen.resize(k + 1, 0);
@@ -515,6 +561,9 @@ impl TileGrid {
                         self.seen[k] = self.stamp;
                         out.push(i);
                     }
+                }
+                if keep < scan {
+                    cell.drain(keep..scan);
                 }
             }
         }
