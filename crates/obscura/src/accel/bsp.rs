@@ -29,7 +29,9 @@
 //!   axis-aligned plane through the median of the polygons' first vertices along the
 //!   longest side of their box: a convex object has no balancing plane of its own
 //!   (each face's plane leaves all the others on one side), so without it the tree
-//!   of a sphere is a chain. Such a node may hold no polygon.
+//!   of a sphere is a chain, O(m^2) to build for m faces. The axis plane wins when it
+//!   scores better, or when every polygon candidate is such a one-sided plane and the
+//!   axis plane cuts less than a quarter of the set. Such a node may hold no polygon.
 //! - Coplanar polygons (within the tolerance) stay in the node, both facings, sorted
 //!   by descending face id: painting them in that order makes the lower id win
 //!   exact ties, as the z-buffer does.
@@ -330,7 +332,18 @@ pub struct BspTree {
     object_vertex_counts: Vec<u32>,
     face_count: u32,
     eps: f64,
+    /// Bounding sphere (centre, radius) of each fragment, for quick classification.
+    spheres: Vec<[f64; 4]>,
+    /// A distance far above the rounding of plane evaluations in the scene.
+    slack: f64,
     stats: BspBuildStats,
+}
+
+/// The centroid of the points and the largest distance from it.
+fn bounding_sphere(points: &[DVec3]) -> [f64; 4] {
+    let c = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
+    let r = points.iter().fold(0.0f64, |m, &p| m.max(p.distance(c)));
+    [c.x, c.y, c.z, r]
 }
 
 /// Sets smaller than this get no axis-aligned candidate plane.
@@ -368,6 +381,8 @@ impl BspTree {
             object_vertex_counts: Vec::with_capacity(scene.objects().len()),
             face_count: scene.face_count(),
             eps: 0.0,
+            spheres: Vec::new(),
+            slack: 0.0,
             stats: BspBuildStats::default(),
         };
         let mut scale = 0.0f64;
@@ -389,6 +404,7 @@ impl BspTree {
             }
         }
         tree.eps = options.tolerance * scale.max(f64::MIN_POSITIVE);
+        tree.slack = 1e-12 * scale.max(f64::MIN_POSITIVE);
         let mut points = Vec::new();
         for (k, o) in scene.objects().iter().enumerate() {
             let base = tree.vertex_base[k];
@@ -409,6 +425,7 @@ impl BspTree {
                     .fold(0.0f64, |m, &q| m.max(plane.evaluate(q).abs()));
                 let start = tree.fragment_vertices.len() as u32;
                 tree.fragment_vertices.extend(idx.iter().map(|&i| base + i));
+                tree.spheres.push(bounding_sphere(&points));
                 tree.fragments.push(Fragment {
                     face: o.first_face + o.mesh.polygon_face(p),
                     object: k as u32,
@@ -530,11 +547,12 @@ impl BspTree {
         } else {
             options.score_sample
         };
+        // (score, whether the plane leaves one side empty without splitting, splits)
         let score = |plane: &Plane, eps: f64, skip: usize| {
             let (mut front, mut back, mut spans) = (0u64, 0u64, 0u64);
             for s in 0..sample {
                 // Evenly spaced over the set: s * n / sample, in integers.
-                let i = (s as u128 * n as u128 / sample as u128) as usize;
+                let i = (s as u64 * n as u64 / sample as u64) as usize;
                 if i == skip {
                     continue;
                 }
@@ -545,22 +563,27 @@ impl BspTree {
                     Side::On => {}
                 }
             }
-            options.split_weight * spans as f64
-                + options.balance_weight * (front as f64 - back as f64).abs()
+            let cost = options.split_weight * spans as f64
+                + options.balance_weight * (front as f64 - back as f64).abs();
+            (cost, spans == 0 && (front == 0 || back == 0), spans)
         };
-        let mut best = (f64::INFINITY, 0usize);
+        let mut best = (f64::INFINITY, 0usize, false);
         for &c in &candidates {
             let f = &self.fragments[set[c] as usize];
-            let s = score(&f.plane, self.eps + f.thickness, c);
-            if s < best.0 {
-                best = (s, c);
+            let (cost, one_sided, _) = score(&f.plane, self.eps + f.thickness, c);
+            if cost < best.0 {
+                best = (cost, c, one_sided);
             }
         }
-        if let Some(plane) = axis
-            && score(&plane, self.eps, usize::MAX) < best.0
-            && self.divides(set, &plane)
-        {
-            return Splitter::Axis(plane);
+        if let Some(plane) = axis {
+            let (cost, _, spans) = score(&plane, self.eps, usize::MAX);
+            // A one-sided polygon plane only peels one polygon off: on a convex
+            // surface every candidate is one, and a chain of m nodes costs O(m^2) to
+            // build. The axis plane then wins if it cuts less than a quarter of the set.
+            let better = cost < best.0 || (best.2 && 4 * spans < sample as u64);
+            if better && self.divides(set, &plane) {
+                return Splitter::Axis(plane);
+            }
         }
         Splitter::Polygon(best.1)
     }
@@ -615,8 +638,18 @@ impl BspTree {
     }
 
     fn classify(&self, f: u32, plane: &Plane, eps: f64) -> Side {
-        let frag = &self.fragments[f as usize];
         let len = plane.normal.length();
+        // Most fragments are far from the plane: their bounding sphere decides without
+        // reading the vertices (with a margin far above rounding).
+        let [cx, cy, cz, r] = self.spheres[f as usize];
+        let d = plane.evaluate(DVec3::new(cx, cy, cz)) / len;
+        if d - r > eps + self.slack {
+            return Side::Front;
+        }
+        if d + r < -eps - self.slack {
+            return Side::Back;
+        }
+        let frag = &self.fragments[f as usize];
         let (mut front, mut back) = (false, false);
         for &v in self.fragment_indices(frag) {
             // The same expression as `split_polygon`, so both agree on every vertex.
@@ -686,6 +719,7 @@ impl BspTree {
             };
             self.fragment_vertices.push(v);
         }
+        self.spheres.push(bounding_sphere(piece));
         self.fragments.push(Fragment {
             start,
             len: piece.len() as u32,
