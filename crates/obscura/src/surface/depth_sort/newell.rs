@@ -10,7 +10,7 @@
 //! goes back to the heap and the marks are cleared.
 
 use std::cmp::{Ordering, Reverse};
-use std::collections::BinaryHeap;
+use std::collections::{BinaryHeap, HashMap};
 
 use super::Counters;
 use super::work::{Sides, TileGrid, WorkSet};
@@ -56,6 +56,10 @@ struct Sorter<'w> {
     stack: Vec<u32>,
     grid: TileGrid,
     split_budget: u64,
+    /// For polygons waiting in the stack: their candidates and where the scan stopped.
+    /// Those before it cannot be hidden by the polygon, and stay so until a split
+    /// (which clears this).
+    resume: HashMap<u32, (Vec<u32>, usize)>,
 }
 
 impl Sorter<'_> {
@@ -125,6 +129,7 @@ impl Sorter<'_> {
         counters.splits += 1;
         self.split_budget = self.split_budget.saturating_sub(1);
         self.state[i as usize] = State::Dead;
+        self.resume.clear();
         for s in std::mem::take(&mut self.stack) {
             if s != i {
                 self.push_heap(s);
@@ -157,6 +162,7 @@ pub(super) fn sort(
         stack: Vec::new(),
         grid,
         split_budget: super::split_budget(n),
+        resume: HashMap::new(),
     };
     // Farthest first, so that every tile's list is built by appending.
     let mut order: Vec<u32> = (0..n as u32).collect();
@@ -168,7 +174,7 @@ pub(super) fn sort(
     for i in order {
         s.add(i);
     }
-    let mut candidates = Vec::new();
+    let mut spare = Vec::new();
     let mut painted = 0usize;
     while let Some(p) = s.head() {
         let pk = p as usize;
@@ -176,20 +182,28 @@ pub(super) fn sort(
             let pp = &s.ws.polys[pk];
             (pp.rect, pp.dmin, pp.face)
         };
-        let (state, polys) = (&s.state, &s.ws.polys);
-        // Test 0 in the grid: a tile's polygons come farthest first, so the scan of a
-        // tile ends at the first one entirely nearer than P.
-        s.grid.query(
-            &prect,
-            |i| matches!(state[i as usize], State::InHeap | State::InStack),
-            |i| polys[i as usize].dmax < pdmin,
-            &mut candidates,
-        );
+        let (candidates, start) = match s.resume.remove(&p) {
+            Some(r) => r,
+            None => {
+                let mut c = std::mem::take(&mut spare);
+                let (state, polys) = (&s.state, &s.ws.polys);
+                // Test 0 in the grid: a tile's polygons come farthest first, so the
+                // scan of a tile ends at the first one entirely nearer than P.
+                s.grid.query(
+                    &prect,
+                    |i| matches!(state[i as usize], State::InHeap | State::InStack),
+                    |i| polys[i as usize].dmax < pdmin,
+                    &mut c,
+                );
+                (c, 0)
+            }
+        };
         // The first polygon P hides, and whether it may go first (swap) or the two
         // interpenetrate (split).
         let mut blocker: Option<(u32, Sides, bool)> = None;
-        for &q in &candidates {
-            if q == p {
+        let mut stopped = candidates.len();
+        for (at, &q) in candidates.iter().enumerate().skip(start) {
+            if q == p || !matches!(s.state[q as usize], State::InHeap | State::InStack) {
                 continue;
             }
             counters.comparisons += 1;
@@ -230,6 +244,7 @@ pub(super) fn sort(
                 counters.test5 += 1;
                 continue;
             }
+            stopped = at;
             // P may hide Q: can Q go first (tests 3 and 4 with P and Q swapped)?
             if sides.coplanar() {
                 blocker = Some((q, sides, true));
@@ -249,6 +264,7 @@ pub(super) fn sort(
             match s.ws.nearer_over_overlap(p, q) {
                 Some(Ordering::Less) => {
                     counters.overlap_depth += 1;
+                    stopped = candidates.len();
                     continue;
                 }
                 Some(_) => {
@@ -258,6 +274,11 @@ pub(super) fn sort(
                 None => blocker = Some((q, sides, false)),
             }
             break;
+        }
+        if blocker.is_some() {
+            s.resume.insert(p, (candidates, stopped));
+        } else {
+            spare = candidates;
         }
         let Some((q, sides, swapped)) = blocker else {
             s.stack.pop();
@@ -293,6 +314,7 @@ pub(super) fn sort(
         }
         // No order and no split (rounding, or the split budget is spent): paint P.
         counters.unresolved += 1;
+        s.resume.remove(&p);
         s.stack.pop();
         s.state[pk] = State::Painted;
         paint(s.ws, p);
