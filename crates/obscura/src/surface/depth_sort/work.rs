@@ -225,14 +225,40 @@ impl WorkSet {
     }
 
     /// Test 5, negated: whether the projections of `p` and `q` share a pixel sample.
-    /// First the separating-axis test of two convex polygons (an edge of either
-    /// polygon whose line has both on opposite sides, by a margin far above
-    /// rounding), then, if no edge separates them, the exact check on the samples
-    /// both cover under the shared coverage rule (overlaps smaller than a pixel
-    /// change nothing in the image).
+    /// First the separating-axis test of two convex polygons (an edge line of either
+    /// polygon with the other on its outer side; touching counts as separated), then,
+    /// if no edge separates them, the exact check on the samples both cover under the
+    /// shared coverage rule (overlaps smaller than a pixel change nothing in the
+    /// image).
     pub fn projections_overlap(&self, p: u32, q: u32) -> bool {
         let (a, b) = (self.vertices(p), self.vertices(q));
         if separated(a, b) || separated(b, a) {
+            return false;
+        }
+        // Only samples in the box of the overlap region (widened far above rounding)
+        // can be covered by both: most overlaps of small polygons hold none.
+        let region = overlap_region(a, b);
+        let (mut minx, mut miny, mut maxx, mut maxy) = (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for &(x, y) in &region {
+            minx = minx.min(x);
+            maxx = maxx.max(x);
+            miny = miny.min(y);
+            maxy = maxy.max(y);
+        }
+        const WIDEN: f64 = 1e-6;
+        let first = |v: f64, n: u32| (v - WIDEN - 0.5).ceil().clamp(0.0, f64::from(n)) as u32;
+        let end = |v: f64, n: u32| ((v + WIDEN - 0.5).floor() + 1.0).clamp(0.0, f64::from(n)) as u32;
+        if region.is_empty() || !(minx.is_finite() && maxx.is_finite()) {
+            return false;
+        }
+        let (x0, x1) = (first(minx, self.width), end(maxx, self.width));
+        let (y0, y1) = (first(miny, self.height), end(maxy, self.height));
+        if x0 >= x1 || y0 >= y1 {
             return false;
         }
         let screen = |vs: &[ViewVertex]| vs.iter().map(|v| (v.x, v.y)).collect::<Vec<_>>();
@@ -242,10 +268,9 @@ impl WorkSet {
         ) else {
             return false;
         };
-        let (ra, rb) = (ca.rect(), cb.rect());
-        for y in ra.y0.max(rb.y0)..ra.y1.min(rb.y1) {
+        for y in y0..y1 {
             if let (Some((a0, a1)), Some((b0, b1))) = (ca.row_span(y), cb.row_span(y))
-                && a0.max(b0) < a1.min(b1)
+                && a0.max(b0).max(x0) < a1.min(b1).min(x1)
             {
                 return true;
             }
@@ -401,7 +426,11 @@ fn overlap_region(a: &[ViewVertex], b: &[ViewVertex]) -> Vec<(f64, f64)> {
     poly
 }
 
-/// Whether an edge line of convex polygon `a` has all of `b` strictly outside `a`.
+/// Whether an edge line of convex polygon `a` has all of `b` on its outer side.
+/// Touching counts as separated (within a margin far above rounding): polygons that
+/// meet only along a line share no pixel sample except samples exactly on that line,
+/// which the coverage rule gives to one of them (or, for edges with different
+/// endpoints, decides by rounding: a near tie).
 fn separated(a: &[ViewVertex], b: &[ViewVertex]) -> bool {
     let n = a.len();
     // Orientation of `a` (screen y is down, either winding is possible).
@@ -425,7 +454,7 @@ fn separated(a: &[ViewVertex], b: &[ViewVertex]) -> bool {
         } else {
             (p.y - q.y, q.x - p.x)
         };
-        let len = nx.hypot(ny);
+        let len = (nx * nx + ny * ny).sqrt();
         if len == 0.0 {
             continue;
         }
@@ -436,7 +465,7 @@ fn separated(a: &[ViewVertex], b: &[ViewVertex]) -> bool {
         let bmin = b.iter().fold(f64::INFINITY, |m, v| {
             m.min(nx * (v.x - p.x) + ny * (v.y - p.y))
         });
-        if bmin > amax + margin {
+        if bmin >= amax - margin {
             return true;
         }
     }
