@@ -568,3 +568,27 @@ fn axis_planes_keep_the_tree_of_a_convex_object_shallow() {
     let v = view(&s, &cam, 80, 60);
     both_traversals(&v, 1.0, "sphere");
 }
+
+#[test]
+fn front_to_back_skips_hidden_and_offscreen_subtrees_without_changing_the_frame() {
+    // A street view of a city: near buildings hide most of the others.
+    let scene = demo::city(24, 24, 5);
+    let cam = Camera::perspective(
+        DVec3::new(0.2, 0.6, 13.0),
+        DVec3::new(0.0, 0.8, 0.0),
+        DVec3::Y,
+        60.,
+        0.1,
+        80.,
+    );
+    let v = view(&scene, &cam, 160, 90);
+    let (f2b, s) = bsp::render(&v, &options(BspTraversal::FrontToBack)).unwrap();
+    assert!(s.get("subtrees_hidden").unwrap() > 0.0);
+    assert!(s.get("subtrees_outside").unwrap() > 0.0);
+    assert!(s.get("fragments_visited").unwrap() < s.get("bsp_fragments").unwrap());
+    assert_like_zbuffer(&f2b, &v, 1.0, "street view, front to back");
+    let (b2f, s) = bsp::render(&v, &options(BspTraversal::BackToFront)).unwrap();
+    assert_eq!(s.get("subtrees_hidden"), Some(0.0));
+    assert_eq!(s.get("fragments_visited"), s.get("bsp_fragments"));
+    assert_eq!(f2b.ids, b2f.ids);
+}

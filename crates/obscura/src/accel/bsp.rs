@@ -51,7 +51,7 @@ use std::time::Instant;
 use glam::DVec3;
 
 use crate::clip::split::{Split, split_polygon};
-use crate::geom::Plane;
+use crate::geom::{Aabb, Plane};
 use crate::scene::{Camera, Projection, Scene, demo::SplitMix64};
 use crate::{Error, Result};
 
@@ -233,6 +233,19 @@ impl Viewpoint {
     }
 }
 
+/// What a traversal calls ([`BspTree::traverse_with`]).
+pub trait BspVisitor {
+    /// Called before node `node`'s subtree is visited; `false` skips the whole subtree
+    /// (e.g. because it is hidden). Visits everything by default.
+    fn enter(&mut self, node: u32) -> bool {
+        let _ = node;
+        true
+    }
+
+    /// Called for each fragment in order; `Break` ends the traversal.
+    fn fragment(&mut self, fragment: u32) -> ControlFlow<()>;
+}
+
 /// `local` of vertices made by splitting.
 const MADE_BY_SPLIT: u32 = u32::MAX;
 
@@ -336,6 +349,9 @@ pub struct BspTree {
     spheres: Vec<[f64; 4]>,
     /// A distance far above the rounding of plane evaluations in the scene.
     slack: f64,
+    /// Per node, the box of its subtree's fragments and their number.
+    subtree_bounds: Vec<Aabb>,
+    subtree_counts: Vec<u32>,
     stats: BspBuildStats,
 }
 
@@ -383,6 +399,8 @@ impl BspTree {
             eps: 0.0,
             spheres: Vec::new(),
             slack: 0.0,
+            subtree_bounds: Vec::new(),
+            subtree_counts: Vec::new(),
             stats: BspBuildStats::default(),
         };
         let mut scale = 0.0f64;
@@ -439,6 +457,7 @@ impl BspTree {
         }
         let all: Vec<u32> = (0..tree.fragments.len() as u32).collect();
         tree.build_nodes(all, options);
+        tree.compute_subtree_bounds();
         tree.stats.nodes = tree.nodes.len() as u64;
         tree.stats.fragments = tree.node_fragments.len() as u64;
         tree.stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -519,6 +538,29 @@ impl BspTree {
                 stack.push((idx, child, depth + 1));
             }
             self.nodes[n as usize] = node;
+        }
+    }
+
+    /// Children have larger indices than their parent: one pass from the end.
+    fn compute_subtree_bounds(&mut self) {
+        let n = self.nodes.len();
+        self.subtree_bounds = vec![Aabb::EMPTY; n];
+        self.subtree_counts = vec![0; n];
+        for i in (0..n).rev() {
+            let node = self.nodes[i];
+            let mut b = Aabb::EMPTY;
+            for &f in self.node_fragments(i as u32) {
+                for &v in self.fragment_indices(&self.fragments[f as usize]) {
+                    b = b.with_point(self.vertices[v as usize].world);
+                }
+            }
+            let mut count = node.count;
+            for c in [node.front, node.back].into_iter().flatten() {
+                b = b.union(self.subtree_bounds[c as usize]);
+                count += self.subtree_counts[c as usize];
+            }
+            self.subtree_bounds[i] = b;
+            self.subtree_counts[i] = count;
         }
     }
 
@@ -830,10 +872,27 @@ impl BspTree {
     /// A viewpoint exactly on a node's plane sees that node's fragments edge-on and
     /// the two subtrees on opposite sides of a line of the image, so either order is
     /// correct there; the front subtree is taken as the near one.
-    pub fn traverse<F>(&self, viewpoint: Viewpoint, traversal: BspTraversal, mut visit: F) -> bool
+    pub fn traverse<F>(&self, viewpoint: Viewpoint, traversal: BspTraversal, visit: F) -> bool
     where
         F: FnMut(u32) -> ControlFlow<()>,
     {
+        struct Fragments<F>(F);
+        impl<F: FnMut(u32) -> ControlFlow<()>> BspVisitor for Fragments<F> {
+            fn fragment(&mut self, fragment: u32) -> ControlFlow<()> {
+                (self.0)(fragment)
+            }
+        }
+        self.traverse_with(viewpoint, traversal, &mut Fragments(visit))
+    }
+
+    /// [`BspTree::traverse`] with a visitor that may also skip whole subtrees
+    /// ([`BspVisitor::enter`]).
+    pub fn traverse_with<V: BspVisitor>(
+        &self,
+        viewpoint: Viewpoint,
+        traversal: BspTraversal,
+        visitor: &mut V,
+    ) -> bool {
         enum Item {
             Node(u32),
             Fragments(u32),
@@ -845,6 +904,9 @@ impl BspTree {
         while let Some(item) = stack.pop() {
             match item {
                 Item::Node(n) => {
+                    if !visitor.enter(n) {
+                        continue;
+                    }
                     let node = &self.nodes[n as usize];
                     let (near, far) = if viewpoint.side(&node.plane) >= 0.0 {
                         (node.front, node.back)
@@ -867,8 +929,12 @@ impl BspTree {
                 Item::Fragments(n) => {
                     let frags = self.node_fragments(n);
                     let flow = match traversal {
-                        BspTraversal::BackToFront => frags.iter().try_for_each(|&f| visit(f)),
-                        BspTraversal::FrontToBack => frags.iter().rev().try_for_each(|&f| visit(f)),
+                        BspTraversal::BackToFront => {
+                            frags.iter().try_for_each(|&f| visitor.fragment(f))
+                        }
+                        BspTraversal::FrontToBack => {
+                            frags.iter().rev().try_for_each(|&f| visitor.fragment(f))
+                        }
                     };
                     if flow.is_break() {
                         return false;
@@ -877,6 +943,18 @@ impl BspTree {
             }
         }
         true
+    }
+
+    /// The world-space box of every fragment in node `i`'s subtree.
+    #[must_use]
+    pub fn subtree_bounds(&self, i: u32) -> &Aabb {
+        &self.subtree_bounds[i as usize]
+    }
+
+    /// The number of fragments in node `i`'s subtree.
+    #[must_use]
+    pub fn subtree_fragments(&self, i: u32) -> u32 {
+        self.subtree_counts[i as usize]
     }
 
     /// The fragments in the order a traversal visits them.

@@ -188,7 +188,16 @@ impl Painter {
             miny = miny.min(y);
             maxy = maxy.max(y);
         }
-        if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
+        self.box_covered(minx, miny, maxx, maxy)
+    }
+
+    /// Whether everything a screen box `[minx, maxx] x [miny, maxy]` could cover is
+    /// already painted (write-once mode; whole blocks are checked, so the answer is
+    /// conservative). Non-finite boxes are never covered.
+    pub fn box_covered(&self, minx: f64, miny: f64, maxx: f64, maxy: f64) -> bool {
+        if self.mode != PaintMode::WriteOnce
+            || !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite())
+        {
             return false;
         }
         let (w, h) = (f64::from(self.frame.width), f64::from(self.frame.height));

@@ -252,7 +252,8 @@ impl WorkSet {
         }
         const WIDEN: f64 = 1e-6;
         let first = |v: f64, n: u32| (v - WIDEN - 0.5).ceil().clamp(0.0, f64::from(n)) as u32;
-        let end = |v: f64, n: u32| ((v + WIDEN - 0.5).floor() + 1.0).clamp(0.0, f64::from(n)) as u32;
+        let end =
+            |v: f64, n: u32| ((v + WIDEN - 0.5).floor() + 1.0).clamp(0.0, f64::from(n)) as u32;
         if region.is_empty() || !(minx.is_finite() && maxx.is_finite()) {
             return false;
         }
