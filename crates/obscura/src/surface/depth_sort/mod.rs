@@ -63,8 +63,18 @@
 //!   split adds a polygon. A split budget (`8 P + 1024`) guarantees termination on
 //!   degenerate input; past it, remaining conflicts are painted as found and counted
 //!   in `unresolved`.
-//! - Limitations: single-threaded; a polygon whose box spans the image is compared
-//!   with everything it overlaps each time it reaches the head of the list.
+//! - A polygon that had to wait at the head keeps its candidate list and resumes its
+//!   scan where it stopped (those before cannot be hidden by it), until a split.
+//! - Stats: `polygons` (of the view), `polygons_sorted` (covering a sample),
+//!   `comparisons`, and which test decided them: `decided_depth` (only candidates
+//!   met before a tile's scan stops), `decided_same_face` (pieces of one face),
+//!   `decided_test1_x` ... `decided_test5`, `decided_coplanar`,
+//!   `decided_overlap_depth`; Newell's `swaps` (with `swap_test3`, `swap_test4`,
+//!   `swap_overlap_depth` saying why) and `cycles`; the matrix's `relations` (edges
+//!   of M), `decided_planes_both_orders` and `cycles_broken`; `splits`, `unresolved`,
+//!   `polygons_painted`, `pixels_written`.
+//! - Limitations: single-threaded; polygons whose box spans much of the image are
+//!   listed in many tiles and met once per tile by the scans that reach them.
 
 mod matrix;
 mod newell;
