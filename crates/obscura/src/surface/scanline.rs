@@ -59,8 +59,7 @@ use crate::view::{PreparedView, ViewTransform};
 
 use edge_table::{EdgeTable, ScanEdge};
 use screen_faces::{
-    ScreenFace, fill_run, hides, hides_over_overlap, screen_faces, set_pixel, stored_key,
-    surely_nearer,
+    ScreenFaces, fill_run, hides, hides_over_overlap, set_pixel, stored_key, surely_nearer,
 };
 
 /// Renders a prepared view with the scanline algorithm.
@@ -158,8 +157,19 @@ struct RememberedSpan {
     hash: u64,
     count: u32,
     winner: u32,
-    proven: bool,
+    order: Order,
     members: (u32, u32),
+}
+
+/// Whether the nearest face of a set of faces is known to stay the nearest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Order {
+    /// Not checked yet (the set was seen on one row only).
+    Unknown,
+    /// The winner hides every other face of the set wherever they overlap.
+    Fixed,
+    /// The check failed: faces of the set may swap, so it is not tried again.
+    MayChange,
 }
 
 /// The previous row's multi-face spans, and the current row's being recorded.
@@ -207,7 +217,7 @@ impl Coherence {
             .copied()
     }
 
-    fn remember(&mut self, x0: u32, x1: u32, hash: u64, active: &[u32], winner: u32, proven: bool) {
+    fn remember(&mut self, x0: u32, x1: u32, hash: u64, active: &[u32], winner: u32, order: Order) {
         let a = self.current_members.len() as u32;
         self.current_members.extend_from_slice(active);
         self.current.push(RememberedSpan {
@@ -216,9 +226,27 @@ impl Coherence {
             hash,
             count: active.len() as u32,
             winner,
-            proven,
+            order,
             members: (a, self.current_members.len() as u32),
         });
+    }
+}
+
+/// Sorts a slice that is nearly sorted in time linear in its length plus the number
+/// of out-of-order pairs (stable).
+fn insertion_sort_by_key<T: Copy, K: Ord>(v: &mut [T], key: impl Fn(&T) -> K) {
+    for i in 1..v.len() {
+        let item = v[i];
+        let k = key(&item);
+        if key(&v[i - 1]) <= k {
+            continue;
+        }
+        let mut j = i;
+        while j > 0 && key(&v[j - 1]) > k {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = item;
     }
 }
 
@@ -248,7 +276,8 @@ struct Counters {
 }
 
 struct Scanner<'v> {
-    faces: Vec<ScreenFace>,
+    view: &'v PreparedView<'v>,
+    faces: ScreenFaces,
     transform: &'v ViewTransform,
     width: u32,
     frame: Frame,
@@ -261,6 +290,9 @@ struct Scanner<'v> {
     position: Vec<u32>,
     touched: Vec<u32>,
     active_edges: Vec<ScanEdge>,
+    incoming: Vec<ScanEdge>,
+    incoming_order: Vec<(u32, u32)>,
+    merged: Vec<ScanEdge>,
     crossings: Vec<Crossing>,
     active: Vec<u32>,
     active_hash: u64,
@@ -278,10 +310,11 @@ fn run(
 ) -> Result<(Frame, Stats, Vec<RowTrace>)> {
     let vp = view.viewport();
     let frame = Frame::new(vp)?;
-    let faces = screen_faces(view, options.fill_rule);
+    let faces = ScreenFaces::new(view, options.fill_rule);
     let table = EdgeTable::build(view, &faces, vp.height);
     let n = faces.len();
     let mut s = Scanner {
+        view,
         faces,
         transform: view.transform(),
         width: vp.width,
@@ -293,6 +326,9 @@ fn run(
         position: vec![NONE; n],
         touched: Vec::new(),
         active_edges: Vec::new(),
+        incoming: Vec::new(),
+        incoming_order: Vec::new(),
+        merged: Vec::new(),
         crossings: Vec::new(),
         active: Vec::new(),
         active_hash: 0,
@@ -315,8 +351,7 @@ fn run(
                 spans: Vec::new(),
             });
         }
-        s.active_edges.extend_from_slice(table.bucket(y));
-        s.row(y);
+        s.row(y, table.bucket(y));
         if let Some(t) = s.trace.take() {
             traces.push(t);
         }
@@ -344,9 +379,9 @@ fn run(
 
 impl Scanner<'_> {
     /// One scanline: crossings, spans, then stepping the active edges to the next row.
-    fn row(&mut self, y: u32) {
+    fn row(&mut self, y: u32, starting: &[ScanEdge]) {
         let py = f64::from(y) + 0.5;
-        if self.active_edges.is_empty() {
+        if self.active_edges.is_empty() && starting.is_empty() {
             self.coherence.next_row();
             if self.trace.is_some() {
                 let span = self.traced(0, self.width, SpanDecision::Background);
@@ -356,7 +391,7 @@ impl Scanner<'_> {
             }
             return;
         }
-        self.settle_crossings(y, py);
+        self.settle_crossings(y, py, starting);
         self.settle_spans(y);
         self.emit_crossings();
         self.walk(y);
@@ -373,11 +408,16 @@ impl Scanner<'_> {
 
     /// Settles every active edge's crossing pixel and folds them into per-face
     /// bounds: a face's span lies right of all its left edges and left of all its
-    /// right edges (and inside its sample box).
-    fn settle_crossings(&mut self, y: u32, py: f64) {
+    /// right edges (and inside its sample box). Then sorts the list by crossing: the
+    /// edges already there barely change order from one row to the next (insertion
+    /// sort, linear in the number of swaps), the starting ones are sorted apart and
+    /// merged in.
+    fn settle_crossings(&mut self, y: u32, py: f64, starting: &[ScanEdge]) {
         self.touched.clear();
+        self.incoming.clear();
+        self.incoming.extend_from_slice(starting);
         let mut corrections = 0;
-        for e in &mut self.active_edges {
+        for e in self.active_edges.iter_mut().chain(self.incoming.iter_mut()) {
             corrections += e.cross(py);
             let f = e.face as usize;
             if self.stamp[f] != y {
@@ -393,7 +433,28 @@ impl Scanner<'_> {
             }
         }
         self.counters.corrections += corrections;
-        self.active_edges.sort_by_key(|e| e.pixel);
+        insertion_sort_by_key(&mut self.active_edges, |e| e.pixel);
+        if !self.incoming.is_empty() {
+            self.incoming_order.clear();
+            self.incoming_order.extend(
+                self.incoming
+                    .iter()
+                    .enumerate()
+                    .map(|(k, e)| (e.pixel, k as u32)),
+            );
+            self.incoming_order.sort_unstable();
+            self.merged.clear();
+            let mut a = 0;
+            for &(pixel, k) in &self.incoming_order {
+                while a < self.active_edges.len() && self.active_edges[a].pixel <= pixel {
+                    self.merged.push(self.active_edges[a]);
+                    a += 1;
+                }
+                self.merged.push(self.incoming[k as usize]);
+            }
+            self.merged.extend_from_slice(&self.active_edges[a..]);
+            std::mem::swap(&mut self.active_edges, &mut self.merged);
+        }
         let c = &mut self.counters;
         c.max_active_edges = c.max_active_edges.max(self.active_edges.len());
         if let Some(t) = &mut self.trace {
@@ -401,8 +462,8 @@ impl Scanner<'_> {
                 .active_edges
                 .iter()
                 .map(|e| ActiveEdge {
-                    face: self.faces[e.face as usize].face,
-                    y_min: e.y_min,
+                    face: self.faces.faces[e.face as usize].face,
+                    y_min: e.edge.oy,
                     x: e.x,
                     y_max: e.y_max,
                     inverse_slope: e.inverse_slope,
@@ -423,10 +484,13 @@ impl Scanner<'_> {
             if a >= b {
                 continue;
             }
-            let cov = &self.faces[f].coverage;
-            if !(cov.covers(a, y) && cov.covers(b - 1, y)) {
+            if !(self.faces.covers(f, a, y) && self.faces.covers(f, b - 1, y)) {
                 self.counters.fallbacks += 1;
-                let (a, b) = cov.row_span(y).unwrap_or((a, a));
+                let (a, b) = self
+                    .faces
+                    .coverage(self.view, f)
+                    .and_then(|c| c.row_span(y))
+                    .unwrap_or((a, a));
                 self.lo[f] = a;
                 self.hi[f] = b;
             }
@@ -473,7 +537,7 @@ impl Scanner<'_> {
             }
             self.emitted[fu] = 0;
         }
-        self.crossings.sort_by_key(|c| c.x);
+        insertion_sort_by_key(&mut self.crossings, |c| c.x);
     }
 
     /// Walks the crossings left to right, flipping flags and deciding each span.
@@ -523,7 +587,7 @@ impl Scanner<'_> {
             1 => {
                 self.counters.spans += 1;
                 self.counters.without_comparison += 1;
-                let f = &self.faces[self.active[0] as usize];
+                let f = &self.faces.faces[self.active[0] as usize];
                 fill_run(&mut self.frame, self.transform, y, x0, x1, f);
                 SpanDecision::SingleFace
             }
@@ -544,7 +608,7 @@ impl Scanner<'_> {
         let mut faces: Vec<u32> = self
             .active
             .iter()
-            .map(|&f| self.faces[f as usize].face)
+            .map(|&f| self.faces.faces[f as usize].face)
             .collect();
         faces.sort_unstable();
         TracedSpan {
@@ -562,13 +626,13 @@ impl Scanner<'_> {
         let seen = self
             .coherence
             .find(x0, x1, hash, &self.active, &self.position);
-        if let Some(s) = seen.filter(|s| s.proven) {
+        if let Some(s) = seen.filter(|s| s.order == Order::Fixed) {
             self.counters.by_coherence += 1;
             self.counters.skipped += 3 * (k - 1);
-            let f = &self.faces[s.winner as usize];
+            let f = &self.faces.faces[s.winner as usize];
             fill_run(&mut self.frame, self.transform, y, x0, x1, f);
             self.coherence
-                .remember(x0, x1, hash, &self.active, s.winner, true);
+                .remember(x0, x1, hash, &self.active, s.winner, Order::Fixed);
             return SpanDecision::Coherence;
         }
 
@@ -579,7 +643,7 @@ impl Scanner<'_> {
         self.keys_left.clear();
         self.keys_right.clear();
         for &f in &self.active {
-            let p = &self.faces[f as usize].plane;
+            let p = &self.faces.faces[f as usize].plane;
             self.keys_left.push(p.at(pl, py));
             self.keys_right.push(p.at(pr, py));
         }
@@ -605,13 +669,23 @@ impl Scanner<'_> {
         if nearer_all_along {
             self.counters.at_ends += 1;
             let winner = self.active[w];
-            let f = &self.faces[winner as usize];
+            let f = &self.faces.faces[winner as usize];
             fill_run(&mut self.frame, self.transform, y, x0, x1, f);
             // The same set on the previous row: check once whether the order can
             // change anywhere, so that later rows may skip the comparisons.
-            let proven = seen.is_some() && self.order_is_fixed(winner);
+            let order = match seen {
+                None => Order::Unknown,
+                Some(s) if s.order == Order::Unknown && s.winner == winner => {
+                    if self.order_is_fixed(winner) {
+                        Order::Fixed
+                    } else {
+                        Order::MayChange
+                    }
+                }
+                Some(_) => Order::MayChange,
+            };
             self.coherence
-                .remember(x0, x1, hash, &self.active, winner, proven);
+                .remember(x0, x1, hash, &self.active, winner, order);
             return SpanDecision::NearestAtEnds;
         }
 
@@ -619,16 +693,16 @@ impl Scanner<'_> {
         for x in x0..x1 {
             let px = f64::from(x) + 0.5;
             let mut best = self.active[0];
-            let mut best_key = stored_key(&self.faces[best as usize].plane, px, py);
+            let mut best_key = stored_key(&self.faces.faces[best as usize].plane, px, py);
             for &g in &self.active[1..] {
-                let kg = stored_key(&self.faces[g as usize].plane, px, py);
+                let kg = stored_key(&self.faces.faces[g as usize].plane, px, py);
                 if hides(kg, g, best_key, best) {
                     best = g;
                     best_key = kg;
                 }
             }
             self.counters.comparisons += k - 1;
-            let f = &self.faces[best as usize];
+            let f = &self.faces.faces[best as usize];
             set_pixel(&mut self.frame, self.transform, x, y, f, best_key);
         }
         SpanDecision::PerPixel
@@ -637,10 +711,10 @@ impl Scanner<'_> {
     /// Whether `winner` hides every other active face wherever both can be seen.
     fn order_is_fixed(&mut self, winner: u32) -> bool {
         self.counters.order_checks += 1;
-        let w = &self.faces[winner as usize];
+        let w = &self.faces.faces[winner as usize];
         for &g in &self.active {
             if g != winner {
-                let (ok, n) = hides_over_overlap(w, &self.faces[g as usize]);
+                let (ok, n) = hides_over_overlap(w, &self.faces.faces[g as usize]);
                 self.counters.comparisons += n;
                 if !ok {
                     return false;

@@ -45,10 +45,9 @@
 
 use crate::Result;
 use crate::frame::Frame;
-use crate::raster::{PixelRect, PolygonCoverage};
+use crate::raster::{EdgeFunction, PixelRect, PolygonCoverage};
 use crate::surface::scanline::screen_faces::{
-    ScreenFace, corner_samples, fill_run, hides, intersect, screen_faces, set_pixel, stored_key,
-    surely_nearer,
+    ScreenFaces, corner_samples, fill_run, hides, intersect, set_pixel, stored_key, surely_nearer,
 };
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewTransform};
@@ -91,14 +90,18 @@ pub enum Relation {
 /// ```
 #[must_use]
 pub fn classify(coverage: &PolygonCoverage, window: PixelRect) -> Relation {
-    let r = coverage.rect();
+    classify_edges(coverage.edges(), coverage.rect(), window)
+}
+
+/// [`classify`] from a face's edge functions and sample box.
+fn classify_edges(edges: &[EdgeFunction], r: PixelRect, window: PixelRect) -> Relation {
     let o = intersect(r, window);
     if o.is_empty() {
         return Relation::Disjoint;
     }
     let [c0, c1, c2, c3] = corner_samples(o);
     let mut all_in = o == window;
-    for e in coverage.edges() {
+    for e in edges {
         let (top, bottom) = (e.row_term(c0.1), e.row_term(c2.1));
         let n = u8::from(e.inside_row(c0.0, top))
             + u8::from(e.inside_row(c1.0, top))
@@ -122,7 +125,7 @@ pub fn classify(coverage: &PolygonCoverage, window: PixelRect) -> Relation {
 pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
     let vp = view.viewport();
     let frame = Frame::new(vp)?;
-    let faces = screen_faces(view, options.fill_rule);
+    let faces = ScreenFaces::new(view, options.fill_rule);
     let root = PixelRect {
         x0: 0,
         y0: 0,
@@ -130,6 +133,7 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
         y1: vp.height,
     };
     let mut s = Subdivision {
+        view,
         transform: view.transform(),
         frame,
         members: Vec::with_capacity(faces.len() * 2),
@@ -142,7 +146,7 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
         faces,
     };
     for f in 0..s.faces.len() {
-        let rel = classify(&s.faces[f].coverage, root);
+        let rel = classify_edges(s.faces.edges_of(f), s.faces.faces[f].rect, root);
         s.counters.classifications += 1;
         if rel != Relation::Disjoint {
             s.members.push(f as u32);
@@ -176,7 +180,8 @@ struct Counters {
 }
 
 struct Subdivision<'v> {
-    faces: Vec<ScreenFace>,
+    view: &'v PreparedView<'v>,
+    faces: ScreenFaces,
     transform: &'v ViewTransform,
     frame: Frame,
     // The face lists of the windows on the current path, one after the other: a
@@ -200,16 +205,18 @@ impl Subdivision<'_> {
         match end - start {
             0 => self.decided(win, 0),
             1 => {
-                let f = &self.faces[self.members[start] as usize];
+                let fi = self.members[start] as usize;
+                let f = &self.faces.faces[fi];
                 if self.relations[start] == Relation::Surrounding {
                     for y in win.y0..win.y1 {
                         fill_run(&mut self.frame, self.transform, y, win.x0, win.x1, f);
                     }
                     self.decided(win, 2);
                 } else {
-                    let r = intersect(win, f.coverage.rect());
+                    let r = intersect(win, f.rect);
+                    let coverage = self.faces.coverage(self.view, fi);
                     for y in r.y0..r.y1 {
-                        if let Some((a, b)) = f.coverage.row_span(y) {
+                        if let Some((a, b)) = coverage.as_ref().and_then(|c| c.row_span(y)) {
                             let (a, b) = (a.max(win.x0), b.min(win.x1));
                             fill_run(&mut self.frame, self.transform, y, a, b, f);
                         }
@@ -223,7 +230,7 @@ impl Subdivision<'_> {
             }
             _ => {
                 if let Some(w) = self.surrounding_nearest(win, start, end) {
-                    let f = &self.faces[w as usize];
+                    let f = &self.faces.faces[w as usize];
                     for y in win.y0..win.y1 {
                         fill_run(&mut self.frame, self.transform, y, win.x0, win.x1, f);
                     }
@@ -259,7 +266,7 @@ impl Subdivision<'_> {
         let corners = corner_samples(win);
         self.keys.clear();
         for &f in &self.members[start..end] {
-            let p = &self.faces[f as usize].plane;
+            let p = &self.faces.faces[f as usize].plane;
             self.keys.push(corners.map(|(x, y)| p.at(x, y)));
         }
         let mut w: Option<usize> = None;
@@ -291,16 +298,16 @@ impl Subdivision<'_> {
         self.counters.pixel_decisions += 1;
         let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
         let mut best = self.members[start];
-        let mut best_key = stored_key(&self.faces[best as usize].plane, px, py);
+        let mut best_key = stored_key(&self.faces.faces[best as usize].plane, px, py);
         for &g in &self.members[start + 1..end] {
             self.counters.comparisons += 1;
-            let kg = stored_key(&self.faces[g as usize].plane, px, py);
+            let kg = stored_key(&self.faces.faces[g as usize].plane, px, py);
             if hides(kg, g, best_key, best) {
                 best = g;
                 best_key = kg;
             }
         }
-        let f = &self.faces[best as usize];
+        let f = &self.faces.faces[best as usize];
         set_pixel(&mut self.frame, self.transform, x, y, f, best_key);
     }
 
@@ -324,7 +331,8 @@ impl Subdivision<'_> {
             for i in start..end {
                 let f = self.members[i];
                 self.counters.classifications += 1;
-                let rel = classify(&self.faces[f as usize].coverage, q);
+                let fu = f as usize;
+                let rel = classify_edges(self.faces.edges_of(fu), self.faces.faces[fu].rect, q);
                 if rel != Relation::Disjoint {
                     self.members.push(f);
                     self.relations.push(rel);

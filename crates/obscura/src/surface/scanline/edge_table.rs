@@ -11,7 +11,7 @@
 use crate::raster::EdgeFunction;
 use crate::view::PreparedView;
 
-use super::screen_faces::ScreenFace;
+use super::screen_faces::ScreenFaces;
 
 /// One edge of the edge table and of the active edge list.
 #[derive(Clone, Copy, Debug)]
@@ -23,9 +23,7 @@ pub(crate) struct ScanEdge {
     /// Whether the face lies to the right of it (its crossing opens the face's span);
     /// otherwise the crossing closes it.
     pub left: bool,
-    /// Top end (smaller y).
-    pub y_min: f64,
-    /// Bottom end.
+    /// Bottom end (the top end is the edge function's origin).
     pub y_max: f64,
     /// Where it crosses the current row's sample line.
     pub x: f64,
@@ -50,14 +48,9 @@ impl ScanEdge {
     pub fn cross(&mut self, py: f64) -> u64 {
         let e = &self.edge;
         let row = e.row_term(py);
-        // The first pixel whose centre is at or right of x.
-        let g = (self.x - 0.5).ceil();
         let (lo, hi) = (i64::from(self.x_lo), i64::from(self.x_hi));
-        let guess = if g.is_finite() {
-            g.clamp(lo as f64, hi as f64) as i64
-        } else {
-            lo
-        };
+        // The first pixel whose centre is at or right of x.
+        let guess = ceil_within(self.x - 0.5, lo, hi);
         let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
         let found = if self.left {
             first_true(lo, hi, guess, inside)
@@ -67,6 +60,21 @@ impl ScanEdge {
         self.pixel = found as u32;
         found.abs_diff(guess)
     }
+}
+
+/// `ceil(v)` clamped to `lo..=hi` (`lo >= 0`; `lo` for NaN), without a call to the
+/// C library's `ceil` on targets without a rounding instruction.
+#[inline(always)]
+fn ceil_within(v: f64, lo: i64, hi: i64) -> i64 {
+    if !(v > lo as f64) {
+        return lo;
+    }
+    if !(v < hi as f64) {
+        return hi;
+    }
+    // v > lo >= 0: truncation is the floor.
+    let t = v as i64;
+    if (t as f64) < v { t + 1 } else { t }
 }
 
 /// The first `i` in `lo..hi` where the monotone predicate (false then true) holds,
@@ -97,18 +105,19 @@ impl EdgeTable {
     /// The table of every non-horizontal edge of `faces`, for an image `height` rows
     /// high. Horizontal edges never cross a sample line: whether a row on one is
     /// covered is settled by the per-face span check.
-    pub fn build(view: &PreparedView<'_>, faces: &[ScreenFace], height: u32) -> Self {
-        let mut edges: Vec<(u32, ScanEdge)> = Vec::with_capacity(faces.len() * 3);
+    pub fn build(view: &PreparedView<'_>, faces: &ScreenFaces, height: u32) -> Self {
+        let mut edges: Vec<ScanEdge> = Vec::with_capacity(faces.len() * 3);
+        let mut first_rows: Vec<u32> = Vec::with_capacity(faces.len() * 3);
         let mut points: Vec<(f64, f64)> = Vec::new();
-        for (f, face) in faces.iter().enumerate() {
+        for (f, face) in faces.faces.iter().enumerate() {
             points.clear();
             points.extend(
                 view.polygon(face.polygon as usize)
                     .vertices()
                     .map(|v| (v.x, v.y)),
             );
-            let rect = face.coverage.rect();
-            let fns = face.coverage.edges();
+            let rect = face.rect;
+            let fns = faces.edges_of(f);
             let n = points.len();
             // The coverage made one edge function per pair of distinct consecutive
             // points, in order: pair them up to get the exact end ordinates.
@@ -131,37 +140,38 @@ impl EdgeTable {
                     continue;
                 }
                 let inverse_slope = e.dx / e.dy;
-                let first = first as u32;
-                edges.push((
-                    first,
-                    ScanEdge {
-                        edge: e,
-                        face: f as u32,
-                        left: e.sign < 0.0,
-                        y_min,
-                        y_max,
-                        x: e.ox + (f64::from(first) + 0.5 - e.oy) * inverse_slope,
-                        inverse_slope,
-                        last_row: last as u32,
-                        x_lo: rect.x0,
-                        x_hi: rect.x1,
-                        pixel: rect.x0,
-                    },
-                ));
+                first_rows.push(first as u32);
+                edges.push(ScanEdge {
+                    edge: e,
+                    face: f as u32,
+                    left: e.sign < 0.0,
+                    y_max,
+                    x: e.ox + (first + 0.5 - e.oy) * inverse_slope,
+                    inverse_slope,
+                    last_row: last as u32,
+                    x_lo: rect.x0,
+                    x_hi: rect.x1,
+                    pixel: rect.x0,
+                });
             }
         }
-        // Bucket by first row; the stable sort keeps face order inside a bucket.
-        edges.sort_by_key(|&(row, _)| row);
+        // Bucket by first row with a counting sort (stable: face order in a bucket).
         let mut starts = vec![0u32; height as usize + 1];
-        for &(row, _) in &edges {
+        for &row in &first_rows {
             starts[row as usize + 1] += 1;
         }
         for r in 0..height as usize {
             starts[r + 1] += starts[r];
         }
+        let mut next = starts.clone();
+        let mut order = vec![0u32; edges.len()];
+        for (k, &row) in first_rows.iter().enumerate() {
+            order[next[row as usize] as usize] = k as u32;
+            next[row as usize] += 1;
+        }
         EdgeTable {
             starts,
-            edges: edges.into_iter().map(|(_, e)| e).collect(),
+            edges: order.iter().map(|&k| edges[k as usize]).collect(),
         }
     }
 
@@ -182,6 +192,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn ceil_within_matches_ceil() {
+        for v in [
+            0.0,
+            0.25,
+            1.0,
+            1.5,
+            2.999,
+            3.0,
+            7.0001,
+            -0.5,
+            12.0,
+            40.0,
+            f64::NAN,
+        ] {
+            let expected = if v.is_nan() {
+                2
+            } else {
+                (v.ceil() as i64).clamp(2, 12)
+            };
+            assert_eq!(ceil_within(v, 2, 12), expected, "{v}");
+        }
+    }
+
+    #[test]
     fn first_true_finds_the_switch_from_any_guess() {
         for switch in 0..=10 {
             for guess in -3..14 {
@@ -200,7 +234,6 @@ mod tests {
             edge: e,
             face: 0,
             left: e.sign < 0.0,
-            y_min: 0.0,
             y_max: 8.0,
             x: 0.0, // deliberately wrong
             inverse_slope: 0.5,

@@ -13,43 +13,95 @@
 //! they hold for every rounded key in between; anything closer is decided per pixel.
 
 use crate::frame::Frame;
-use crate::raster::{DepthPlane, FillRule, PixelRect, PolygonCoverage};
+use crate::raster::{DepthPlane, EdgeFunction, FillRule, PixelRect, PolygonCoverage};
 use crate::view::{PreparedView, ViewTransform};
 
 /// A prepared polygon that covers at least one sample of the image.
-#[derive(Clone, Debug)]
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct ScreenFace {
-    /// The pixels it covers (the shared coverage rule).
-    pub coverage: PolygonCoverage,
     /// Its depth key as an affine function of screen position.
     pub plane: DepthPlane,
+    /// The pixels whose samples lie in its bounding box (clipped to the image).
+    pub rect: PixelRect,
     /// The scene-wide face id written to the frame.
     pub face: u32,
-    /// Its index in the [`PreparedView`] (for its screen points).
+    /// Its index in the [`PreparedView`].
     pub polygon: u32,
+    /// Its edge functions in [`ScreenFaces::edges`].
+    edges: (u32, u32),
 }
 
 /// The polygons of a view that cover at least one sample and have a finite depth
-/// plane, in view order (ascending face ids): position in the result is the tie-break
-/// order, as polygon order is for the z-buffer.
-pub(crate) fn screen_faces(view: &PreparedView<'_>, fill: FillRule) -> Vec<ScreenFace> {
-    let vp = view.viewport();
-    view.polygons()
-        .enumerate()
-        .filter_map(|(k, poly)| {
-            let coverage = poly.coverage(fill, vp.width, vp.height)?;
-            let plane = poly.depth_plane()?;
+/// plane, in view order (ascending face ids): position is the tie-break order, as
+/// polygon order is for the z-buffer. Edge functions are kept in one flat array
+/// (what [`PolygonCoverage`] computed for each, so coverage is the shared rule's).
+#[derive(Clone, Debug)]
+pub(crate) struct ScreenFaces {
+    /// The faces.
+    pub faces: Vec<ScreenFace>,
+    edges: Vec<EdgeFunction>,
+    fill: FillRule,
+}
+
+impl ScreenFaces {
+    /// The faces of a view under a fill rule.
+    pub fn new(view: &PreparedView<'_>, fill: FillRule) -> Self {
+        let vp = view.viewport();
+        let mut faces = Vec::with_capacity(view.polygon_count());
+        let mut edges = Vec::with_capacity(view.polygon_count() * 3);
+        for (k, poly) in view.polygons().enumerate() {
+            let Some(coverage) = poly.coverage(fill, vp.width, vp.height) else {
+                continue;
+            };
+            let Some(plane) = poly.depth_plane() else {
+                continue;
+            };
             let finite = [plane.x0, plane.y0, plane.z0, plane.dzdx, plane.dzdy]
                 .iter()
                 .all(|v| v.is_finite());
-            finite.then_some(ScreenFace {
-                coverage,
+            if !finite {
+                continue;
+            }
+            let a = edges.len() as u32;
+            edges.extend_from_slice(coverage.edges());
+            faces.push(ScreenFace {
                 plane,
+                rect: coverage.rect(),
                 face: poly.face,
                 polygon: k as u32,
-            })
-        })
-        .collect()
+                edges: (a, edges.len() as u32),
+            });
+        }
+        ScreenFaces { faces, edges, fill }
+    }
+
+    /// Number of faces.
+    pub fn len(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// The edge functions of face `f`.
+    #[inline]
+    pub fn edges_of(&self, f: usize) -> &[EdgeFunction] {
+        let (a, b) = self.faces[f].edges;
+        &self.edges[a as usize..b as usize]
+    }
+
+    /// Whether face `f` covers pixel `(i, j)`: [`PolygonCoverage::covers`] on the same
+    /// edge functions.
+    #[inline]
+    pub fn covers(&self, f: usize, i: u32, j: u32) -> bool {
+        let (px, py) = (f64::from(i) + 0.5, f64::from(j) + 0.5);
+        self.edges_of(f).iter().all(|e| e.inside(px, py))
+    }
+
+    /// The shared coverage of face `f`, rebuilt from its polygon (for
+    /// [`PolygonCoverage::row_span`]).
+    pub fn coverage(&self, view: &PreparedView<'_>, f: usize) -> Option<PolygonCoverage> {
+        let vp = view.viewport();
+        view.polygon(self.faces[f].polygon as usize)
+            .coverage(self.fill, vp.width, vp.height)
+    }
 }
 
 /// The stored key of a plane at a sample point.
@@ -104,7 +156,7 @@ pub(crate) fn intersect(a: PixelRect, b: PixelRect) -> PixelRect {
 /// the planes cross inside the box even if the polygons do not overlap there.
 /// Returns the number of key comparisons made with the answer.
 pub(crate) fn hides_over_overlap(near: &ScreenFace, far: &ScreenFace) -> (bool, u64) {
-    let r = intersect(near.coverage.rect(), far.coverage.rect());
+    let r = intersect(near.rect, far.rect);
     if r.is_empty() {
         return (true, 0);
     }
