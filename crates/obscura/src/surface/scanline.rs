@@ -10,12 +10,14 @@
 //!
 //! # How it runs here
 //! - Edge table: every non-horizontal edge of every prepared polygon, bucketed by the
-//!   first row whose sample line (`y = j + 0.5`) it meets.
+//!   first row whose sample line (`y = j + 0.5`) it meets. A polygon's coverage and
+//!   depth plane are set up when its first edge enters, and dropped when its last edge
+//!   leaves, so memory follows the faces under the scanline.
 //! - Per row: new edges join the active edge list; each steps `x += 1/m` and settles
 //!   its exact crossing pixel with the shared edge function
 //!   ([`crate::raster::EdgeFunction::inside_row`]), correcting the incremental guess;
-//!   the list is kept sorted by crossing (an adaptive sort: it changes little from one
-//!   row to the next).
+//!   the list is kept sorted by crossing (insertion sort: the order barely changes
+//!   from one row to the next; new edges are merged in).
 //! - A face's span on the row runs from its left crossing to its right one; two more
 //!   pixel tests (its first and last pixel against all its edges) prove it equals the
 //!   shared coverage rule, and the rare row where they fail (a sample exactly on a
@@ -30,18 +32,19 @@
 //!   same place reuses that span's nearest face without comparing, once the order is
 //!   known not to change: the winner must hide each other face over the whole overlap
 //!   of their sample boxes (checked once, at the box corners, when the set is seen on
-//!   two consecutive rows).
+//!   two consecutive rows; a failed check is not retried while the set lasts).
 //!
 //! Input: a [`PreparedView`]; output: the same [`Frame`] as the z-buffer (face ids;
 //! depth from the same `f32` depth keys). Stats: `edges`, `max_active_edges`,
-//! `spans`, `spans_without_comparison`, `spans_decided_at_ends`, `spans_by_coherence`,
-//! `spans_per_pixel`, `depth_comparisons`, `comparisons_skipped_by_coherence`,
+//! `max_active_faces`, `spans`, `spans_without_comparison`, `spans_decided_at_ends`,
+//! `spans_by_coherence`, `spans_per_pixel`, `depth_comparisons`,
+//! `comparisons_skipped_by_coherence`, `order_checks`, `orders_proven`,
 //! `crossing_corrections` (pixels the incremental `x` was off), `span_fallbacks`.
 //!
-//! Complexity: O(E log E) to build the table, then per row O(A) for the active edges
-//! (A of them; the sort is near-linear as the order barely changes), plus per span
-//! O(k) for its k faces, and O(k) per pixel only in spans decided pixel by pixel.
-//! Every pixel is written once. Memory O(E + F) besides the frame.
+//! Complexity: O(E + H) to build the table (E edges, H rows), then per row O(A) for
+//! the A active edges (plus the out-of-order pairs the sort repairs), per span O(k)
+//! for its k faces, and O(k) per pixel only in spans decided pixel by pixel. Every
+//! pixel is written once. Memory: 8 bytes per edge in the table, plus the active faces.
 //!
 //! Limitations: depth is exact for planar polygons (every prepared polygon is);
 //! near-ties are decided on the `f32` keys the z-buffer stores, so the two agree
@@ -54,13 +57,12 @@ use std::ops::Range;
 
 use crate::Result;
 use crate::frame::Frame;
+use crate::raster::{DepthPlane, EdgeFunction, PixelRect, PolygonCoverage};
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewTransform};
 
-use edge_table::{EdgeTable, ScanEdge};
-use screen_faces::{
-    ScreenFaces, fill_run, hides, hides_over_overlap, set_pixel, stored_key, surely_nearer,
-};
+use edge_table::{EdgeTable, ScanEdge, TableEdge, edge_rows};
+use screen_faces::{fill_run, hides, hides_over_overlap, set_pixel, stored_key, surely_nearer};
 
 /// Renders a prepared view with the scanline algorithm.
 pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
@@ -140,13 +142,41 @@ pub struct RowTrace {
 }
 
 const NONE: u32 = u32::MAX;
+/// `slot_of` for a polygon that covers nothing (no coverage or no depth plane).
+const DEAD: u32 = u32::MAX - 1;
 
 /// A crossing that flips a face's flag.
 #[derive(Clone, Copy, Debug)]
 struct Crossing {
     x: u32,
-    face: u32,
+    slot: u32,
     enter: bool,
+}
+
+/// A face while its rows are being scanned.
+#[derive(Clone, Debug)]
+struct ActiveFace {
+    plane: DepthPlane,
+    rect: PixelRect,
+    /// Scene-wide face id.
+    face: u32,
+    /// Index in the view: identity and tie-break order.
+    polygon: u32,
+    /// All its edge functions (horizontal ones too), for the span check.
+    edges: Vec<EdgeFunction>,
+    /// Per vertex pair, the index of its edge function (`NONE` if zero length).
+    pair_edge: Vec<u32>,
+    /// Its screen points.
+    points: Vec<(f64, f64)>,
+    /// How many of its edges are in the active edge list.
+    edges_active: u32,
+    // This row's span, the row it was computed for, which crossings were emitted,
+    // and its place in the active set (`NONE`: flag out).
+    lo: u32,
+    hi: u32,
+    stamp: u32,
+    emitted: u8,
+    position: u32,
 }
 
 /// A span with several faces remembered for the next row.
@@ -156,8 +186,10 @@ struct RememberedSpan {
     x1: u32,
     hash: u64,
     count: u32,
+    /// The nearest face (a polygon index).
     winner: u32,
     order: Order,
+    /// Its faces (polygon indices) in the members array.
     members: (u32, u32),
 }
 
@@ -191,15 +223,16 @@ impl Coherence {
         self.cursor = 0;
     }
 
-    /// The previous row's span overlapping `x0..x1` with exactly the active set.
-    /// Spans are asked for left to right, so a cursor finds them in amortised O(1).
+    /// The previous row's span overlapping `x0..x1` with exactly the active set (of
+    /// `count` faces; `is_active` tells whether a polygon's flag is in). Spans are
+    /// asked for left to right, so a cursor finds them in amortised O(1).
     fn find(
         &mut self,
         x0: u32,
         x1: u32,
         hash: u64,
-        active: &[u32],
-        position: &[u32],
+        count: usize,
+        is_active: impl Fn(u32) -> bool,
     ) -> Option<RememberedSpan> {
         while self.cursor < self.previous.len() && self.previous[self.cursor].x1 <= x0 {
             self.cursor += 1;
@@ -209,25 +242,33 @@ impl Coherence {
             .take_while(|s| s.x0 < x1)
             .find(|s| {
                 s.hash == hash
-                    && s.count as usize == active.len()
+                    && s.count as usize == count
                     && self.previous_members[s.members.0 as usize..s.members.1 as usize]
                         .iter()
-                        .all(|&m| position[m as usize] != NONE)
+                        .all(|&m| is_active(m))
             })
             .copied()
     }
 
-    fn remember(&mut self, x0: u32, x1: u32, hash: u64, active: &[u32], winner: u32, order: Order) {
+    fn remember(
+        &mut self,
+        span: (u32, u32),
+        hash: u64,
+        members: impl Iterator<Item = u32>,
+        winner: u32,
+        order: Order,
+    ) {
         let a = self.current_members.len() as u32;
-        self.current_members.extend_from_slice(active);
+        self.current_members.extend(members);
+        let b = self.current_members.len() as u32;
         self.current.push(RememberedSpan {
-            x0,
-            x1,
+            x0: span.0,
+            x1: span.1,
             hash,
-            count: active.len() as u32,
+            count: b - a,
             winner,
             order,
-            members: (a, self.current_members.len() as u32),
+            members: (a, b),
         });
     }
 }
@@ -252,8 +293,8 @@ fn insertion_sort_by_key<T: Copy, K: Ord>(v: &mut [T], key: impl Fn(&T) -> K) {
 
 /// A face's contribution to the order-independent hash of a set of faces.
 #[inline]
-fn face_hash(f: u32) -> u64 {
-    let mut z = u64::from(f).wrapping_add(0x9E37_79B9_7F4A_7C15);
+fn face_hash(polygon: u32) -> u64 {
+    let mut z = u64::from(polygon).wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -262,6 +303,7 @@ fn face_hash(f: u32) -> u64 {
 #[derive(Debug, Default)]
 struct Counters {
     max_active_edges: usize,
+    max_active_faces: usize,
     spans: u64,
     without_comparison: u64,
     at_ends: u64,
@@ -277,27 +319,29 @@ struct Counters {
 
 struct Scanner<'v> {
     view: &'v PreparedView<'v>,
-    faces: ScreenFaces,
+    options: &'v RenderOptions,
     transform: &'v ViewTransform,
     width: u32,
+    height: u32,
     frame: Frame,
-    // Per face: this row's span, the row it was computed for, which crossings were
-    // emitted, and its place in the active set (NONE: flag out).
-    lo: Vec<u32>,
-    hi: Vec<u32>,
-    stamp: Vec<u32>,
-    emitted: Vec<u8>,
-    position: Vec<u32>,
+    /// Per polygon of the view: its slot, `NONE` when not active, `DEAD` when it
+    /// covers nothing.
+    slot_of: Vec<u32>,
+    slots: Vec<ActiveFace>,
+    free_slots: Vec<u32>,
+    faces_active: usize,
     touched: Vec<u32>,
     active_edges: Vec<ScanEdge>,
     incoming: Vec<ScanEdge>,
     incoming_order: Vec<(u32, u32)>,
     merged: Vec<ScanEdge>,
     crossings: Vec<Crossing>,
+    /// The slots whose flag is in.
     active: Vec<u32>,
     active_hash: u64,
     keys_left: Vec<f64>,
     keys_right: Vec<f64>,
+    depth_points: Vec<(f64, f64, f64)>,
     coherence: Coherence,
     counters: Counters,
     trace: Option<RowTrace>,
@@ -310,20 +354,18 @@ fn run(
 ) -> Result<(Frame, Stats, Vec<RowTrace>)> {
     let vp = view.viewport();
     let frame = Frame::new(vp)?;
-    let faces = ScreenFaces::new(view, options.fill_rule);
-    let table = EdgeTable::build(view, &faces, vp.height);
-    let n = faces.len();
+    let table = EdgeTable::build(view, vp.width, vp.height);
     let mut s = Scanner {
         view,
-        faces,
+        options,
         transform: view.transform(),
         width: vp.width,
+        height: vp.height,
         frame,
-        lo: vec![0; n],
-        hi: vec![0; n],
-        stamp: vec![NONE; n],
-        emitted: vec![0; n],
-        position: vec![NONE; n],
+        slot_of: vec![NONE; view.polygon_count()],
+        slots: Vec::new(),
+        free_slots: Vec::new(),
+        faces_active: 0,
         touched: Vec::new(),
         active_edges: Vec::new(),
         incoming: Vec::new(),
@@ -334,6 +376,7 @@ fn run(
         active_hash: 0,
         keys_left: Vec::new(),
         keys_right: Vec::new(),
+        depth_points: Vec::new(),
         coherence: Coherence::default(),
         counters: Counters::default(),
         trace: None,
@@ -343,8 +386,7 @@ fn run(
         if y % 64 == 0 {
             options.report(f64::from(y) / f64::from(vp.height));
         }
-        let tracing = trace_rows.contains(&y);
-        if tracing {
+        if trace_rows.contains(&y) {
             s.trace = Some(RowTrace {
                 row: y,
                 active_edges: Vec::new(),
@@ -360,9 +402,9 @@ fn run(
     let c = &s.counters;
     let mut stats = Stats::default();
     stats.set("polygons", view.polygon_count() as f64);
-    stats.set("faces_scanned", n as f64);
     stats.set("edges", table.len() as f64);
     stats.set("max_active_edges", c.max_active_edges as f64);
+    stats.set("max_active_faces", c.max_active_faces as f64);
     stats.set("spans", c.spans as f64);
     stats.set("spans_without_comparison", c.without_comparison as f64);
     stats.set("spans_decided_at_ends", c.at_ends as f64);
@@ -378,10 +420,11 @@ fn run(
 }
 
 impl Scanner<'_> {
-    /// One scanline: crossings, spans, then stepping the active edges to the next row.
-    fn row(&mut self, y: u32, starting: &[ScanEdge]) {
-        let py = f64::from(y) + 0.5;
-        if self.active_edges.is_empty() && starting.is_empty() {
+    /// One scanline: new edges, crossings, spans, then stepping the active edges to
+    /// the next row.
+    fn row(&mut self, y: u32, starting: &[TableEdge]) {
+        self.enter_edges(y, starting);
+        if self.active_edges.is_empty() && self.incoming.is_empty() {
             self.coherence.next_row();
             if self.trace.is_some() {
                 let span = self.traced(0, self.width, SpanDecision::Background);
@@ -391,19 +434,138 @@ impl Scanner<'_> {
             }
             return;
         }
-        self.settle_crossings(y, py, starting);
+        self.settle_crossings(y);
         self.settle_spans(y);
         self.emit_crossings();
         self.walk(y);
         self.coherence.next_row();
-        self.active_edges.retain_mut(|e| {
-            if e.last_row == y {
-                false
-            } else {
-                e.x += e.inverse_slope;
-                true
+        self.step_edges(y);
+    }
+
+    /// Sets up the edges of the table that start on row `y` (and their faces, when
+    /// their first edge arrives) in `incoming`.
+    fn enter_edges(&mut self, y: u32, starting: &[TableEdge]) {
+        self.incoming.clear();
+        for &TableEdge { polygon, pair } in starting {
+            let mut s = self.slot_of[polygon as usize];
+            if s == NONE {
+                s = self.activate(polygon);
             }
+            if s == DEAD {
+                continue;
+            }
+            let f = &mut self.slots[s as usize];
+            let Some(&k) = f.pair_edge.get(pair as usize).filter(|&&k| k != NONE) else {
+                continue;
+            };
+            let e = f.edges[k as usize];
+            let n = f.points.len();
+            let (p, q) = (f.points[pair as usize], f.points[(pair as usize + 1) % n]);
+            let (ya, yb) = (p.1.min(q.1), p.1.max(q.1));
+            let Some((first, last)) = edge_rows(ya, yb, f.rect.y0, f.rect.y1) else {
+                continue;
+            };
+            debug_assert_eq!(first, y);
+            debug_assert_eq!(ya, e.oy);
+            let inverse_slope = e.dx / e.dy;
+            f.edges_active += 1;
+            self.incoming.push(ScanEdge {
+                edge: e,
+                x: e.ox + (f64::from(y) + 0.5 - e.oy) * inverse_slope,
+                inverse_slope,
+                y_max: yb,
+                slot: s,
+                last_row: last,
+                x_lo: f.rect.x0,
+                x_hi: f.rect.x1,
+                pixel: f.rect.x0,
+                left: e.sign < 0.0,
+            });
+        }
+    }
+
+    /// Sets up a polygon whose first edge arrives: its coverage (the shared rule)
+    /// and depth plane, in a free slot. `DEAD` if it covers nothing.
+    fn activate(&mut self, polygon: u32) -> u32 {
+        let poly = self.view.polygon(polygon as usize);
+        let s = match self.free_slots.pop() {
+            Some(s) => s,
+            None => {
+                self.slots.push(ActiveFace {
+                    plane: DepthPlane {
+                        x0: 0.0,
+                        y0: 0.0,
+                        z0: 0.0,
+                        dzdx: 0.0,
+                        dzdy: 0.0,
+                    },
+                    rect: PixelRect {
+                        x0: 0,
+                        y0: 0,
+                        x1: 0,
+                        y1: 0,
+                    },
+                    face: 0,
+                    polygon: 0,
+                    edges: Vec::new(),
+                    pair_edge: Vec::new(),
+                    points: Vec::new(),
+                    edges_active: 0,
+                    lo: 0,
+                    hi: 0,
+                    stamp: NONE,
+                    emitted: 0,
+                    position: NONE,
+                });
+                (self.slots.len() - 1) as u32
+            }
+        };
+        let f = &mut self.slots[s as usize];
+        f.points.clear();
+        f.points.extend(poly.vertices().map(|v| (v.x, v.y)));
+        self.depth_points.clear();
+        self.depth_points
+            .extend(poly.vertices().map(|v| (v.x, v.y, v.zq)));
+        let coverage =
+            PolygonCoverage::new(&f.points, self.options.fill_rule, self.width, self.height);
+        let plane = DepthPlane::from_points(&self.depth_points).filter(|p| {
+            [p.x0, p.y0, p.z0, p.dzdx, p.dzdy]
+                .iter()
+                .all(|v| v.is_finite())
         });
+        let (Some(coverage), Some(plane)) = (coverage, plane) else {
+            self.free_slots.push(s);
+            self.slot_of[polygon as usize] = DEAD;
+            return DEAD;
+        };
+        f.plane = plane;
+        f.rect = coverage.rect();
+        f.face = poly.face;
+        f.polygon = polygon;
+        f.edges.clear();
+        f.edges.extend_from_slice(coverage.edges());
+        // The coverage made one edge function per pair of distinct consecutive points.
+        f.pair_edge.clear();
+        let n = f.points.len();
+        let mut k = 0;
+        for i in 0..n {
+            if f.points[i] == f.points[(i + 1) % n] {
+                f.pair_edge.push(NONE);
+            } else {
+                f.pair_edge.push(k);
+                k += 1;
+            }
+        }
+        debug_assert_eq!(k as usize, f.edges.len());
+        f.edges_active = 0;
+        f.stamp = NONE;
+        f.emitted = 0;
+        f.position = NONE;
+        self.slot_of[polygon as usize] = s;
+        self.faces_active += 1;
+        let c = &mut self.counters;
+        c.max_active_faces = c.max_active_faces.max(self.faces_active);
+        s
     }
 
     /// Settles every active edge's crossing pixel and folds them into per-face
@@ -412,24 +574,23 @@ impl Scanner<'_> {
     /// edges already there barely change order from one row to the next (insertion
     /// sort, linear in the number of swaps), the starting ones are sorted apart and
     /// merged in.
-    fn settle_crossings(&mut self, y: u32, py: f64, starting: &[ScanEdge]) {
+    fn settle_crossings(&mut self, y: u32) {
+        let py = f64::from(y) + 0.5;
         self.touched.clear();
-        self.incoming.clear();
-        self.incoming.extend_from_slice(starting);
         let mut corrections = 0;
         for e in self.active_edges.iter_mut().chain(self.incoming.iter_mut()) {
             corrections += e.cross(py);
-            let f = e.face as usize;
-            if self.stamp[f] != y {
-                self.stamp[f] = y;
-                self.lo[f] = e.x_lo;
-                self.hi[f] = e.x_hi;
-                self.touched.push(e.face);
+            let f = &mut self.slots[e.slot as usize];
+            if f.stamp != y {
+                f.stamp = y;
+                f.lo = e.x_lo;
+                f.hi = e.x_hi;
+                self.touched.push(e.slot);
             }
             if e.left {
-                self.lo[f] = self.lo[f].max(e.pixel);
+                f.lo = f.lo.max(e.pixel);
             } else {
-                self.hi[f] = self.hi[f].min(e.pixel);
+                f.hi = f.hi.min(e.pixel);
             }
         }
         self.counters.corrections += corrections;
@@ -454,6 +615,7 @@ impl Scanner<'_> {
             }
             self.merged.extend_from_slice(&self.active_edges[a..]);
             std::mem::swap(&mut self.active_edges, &mut self.merged);
+            self.incoming.clear();
         }
         let c = &mut self.counters;
         c.max_active_edges = c.max_active_edges.max(self.active_edges.len());
@@ -462,7 +624,7 @@ impl Scanner<'_> {
                 .active_edges
                 .iter()
                 .map(|e| ActiveEdge {
-                    face: self.faces.faces[e.face as usize].face,
+                    face: self.slots[e.slot as usize].face,
                     y_min: e.edge.oy,
                     x: e.x,
                     y_max: e.y_max,
@@ -478,21 +640,29 @@ impl Scanner<'_> {
     /// the covered pixels, and coverage along a row is an interval, so a span whose
     /// first and last pixels are covered is exact; otherwise the rule decides.
     fn settle_spans(&mut self, y: u32) {
-        for &f in &self.touched {
-            let f = f as usize;
-            let (a, b) = (self.lo[f], self.hi[f]);
+        let py = f64::from(y) + 0.5;
+        for &s in &self.touched {
+            let f = &mut self.slots[s as usize];
+            let (a, b) = (f.lo, f.hi);
             if a >= b {
                 continue;
             }
-            if !(self.faces.covers(f, a, y) && self.faces.covers(f, b - 1, y)) {
+            let (pa, pb) = (f64::from(a) + 0.5, f64::from(b) - 0.5);
+            let exact = f.edges.iter().all(|e| {
+                let row = e.row_term(py);
+                e.inside_row(pa, row) && e.inside_row(pb, row)
+            });
+            if !exact {
                 self.counters.fallbacks += 1;
-                let (a, b) = self
-                    .faces
-                    .coverage(self.view, f)
-                    .and_then(|c| c.row_span(y))
-                    .unwrap_or((a, a));
-                self.lo[f] = a;
-                self.hi[f] = b;
+                let coverage = PolygonCoverage::new(
+                    &f.points,
+                    self.options.fill_rule,
+                    self.width,
+                    self.height,
+                );
+                let (a, b) = coverage.and_then(|c| c.row_span(y)).unwrap_or((a, a));
+                f.lo = a;
+                f.hi = b;
             }
         }
     }
@@ -502,40 +672,40 @@ impl Scanner<'_> {
     fn emit_crossings(&mut self) {
         self.crossings.clear();
         for e in &self.active_edges {
-            let f = e.face as usize;
-            if self.lo[f] >= self.hi[f] {
+            let f = &mut self.slots[e.slot as usize];
+            if f.lo >= f.hi {
                 continue;
             }
             let bit = if e.left { 1 } else { 2 };
-            if self.emitted[f] & bit == 0 {
-                self.emitted[f] |= bit;
+            if f.emitted & bit == 0 {
+                f.emitted |= bit;
                 self.crossings.push(Crossing {
-                    x: if e.left { self.lo[f] } else { self.hi[f] },
-                    face: e.face,
+                    x: if e.left { f.lo } else { f.hi },
+                    slot: e.slot,
                     enter: e.left,
                 });
             }
         }
         // A face whose span was bounded by its sample box rather than an edge.
-        for &f in &self.touched {
-            let fu = f as usize;
-            if self.lo[fu] < self.hi[fu] {
-                if self.emitted[fu] & 1 == 0 {
+        for &s in &self.touched {
+            let f = &mut self.slots[s as usize];
+            if f.lo < f.hi {
+                if f.emitted & 1 == 0 {
                     self.crossings.push(Crossing {
-                        x: self.lo[fu],
-                        face: f,
+                        x: f.lo,
+                        slot: s,
                         enter: true,
                     });
                 }
-                if self.emitted[fu] & 2 == 0 {
+                if f.emitted & 2 == 0 {
                     self.crossings.push(Crossing {
-                        x: self.hi[fu],
-                        face: f,
+                        x: f.hi,
+                        slot: s,
                         enter: false,
                     });
                 }
             }
-            self.emitted[fu] = 0;
+            f.emitted = 0;
         }
         insertion_sort_by_key(&mut self.crossings, |c| c.x);
     }
@@ -553,7 +723,7 @@ impl Scanner<'_> {
             }
             while i < crossings.len() && crossings[i].x == cx {
                 let c = crossings[i];
-                self.flip(c.face, c.enter);
+                self.flip(c.slot, c.enter);
                 i += 1;
             }
         }
@@ -564,19 +734,44 @@ impl Scanner<'_> {
         self.crossings = crossings;
     }
 
-    fn flip(&mut self, f: u32, enter: bool) {
-        let fu = f as usize;
-        self.active_hash ^= face_hash(f);
+    /// Steps the active edges to the next row, dropping finished ones and freeing
+    /// faces whose last edge left.
+    fn step_edges(&mut self, y: u32) {
+        let slots = &mut self.slots;
+        let free = &mut self.free_slots;
+        let slot_of = &mut self.slot_of;
+        let mut ended = 0;
+        self.active_edges.retain_mut(|e| {
+            if e.last_row == y {
+                let f = &mut slots[e.slot as usize];
+                f.edges_active -= 1;
+                if f.edges_active == 0 {
+                    slot_of[f.polygon as usize] = NONE;
+                    free.push(e.slot);
+                    ended += 1;
+                }
+                false
+            } else {
+                e.x += e.inverse_slope;
+                true
+            }
+        });
+        self.faces_active -= ended;
+    }
+
+    fn flip(&mut self, s: u32, enter: bool) {
+        let f = &mut self.slots[s as usize];
+        self.active_hash ^= face_hash(f.polygon);
         if enter {
-            self.position[fu] = self.active.len() as u32;
-            self.active.push(f);
+            f.position = self.active.len() as u32;
+            self.active.push(s);
         } else {
-            let p = self.position[fu] as usize;
+            let p = f.position as usize;
+            f.position = NONE;
             self.active.swap_remove(p);
             if let Some(&moved) = self.active.get(p) {
-                self.position[moved as usize] = p as u32;
+                self.slots[moved as usize].position = p as u32;
             }
-            self.position[fu] = NONE;
         }
     }
 
@@ -587,8 +782,8 @@ impl Scanner<'_> {
             1 => {
                 self.counters.spans += 1;
                 self.counters.without_comparison += 1;
-                let f = &self.faces.faces[self.active[0] as usize];
-                fill_run(&mut self.frame, self.transform, y, x0, x1, f);
+                let f = &self.slots[self.active[0] as usize];
+                fill_run(&mut self.frame, self.transform, y, x0, x1, &f.plane, f.face);
                 SpanDecision::SingleFace
             }
             _ => {
@@ -608,7 +803,7 @@ impl Scanner<'_> {
         let mut faces: Vec<u32> = self
             .active
             .iter()
-            .map(|&f| self.faces.faces[f as usize].face)
+            .map(|&s| self.slots[s as usize].face)
             .collect();
         faces.sort_unstable();
         TracedSpan {
@@ -621,18 +816,22 @@ impl Scanner<'_> {
 
     /// Decides and draws a span with several faces.
     fn nearest(&mut self, y: u32, x0: u32, x1: u32) -> SpanDecision {
-        let k = self.active.len() as u64;
+        let k = self.active.len();
         let hash = self.active_hash;
-        let seen = self
-            .coherence
-            .find(x0, x1, hash, &self.active, &self.position);
+        let (slots, slot_of) = (&self.slots, &self.slot_of);
+        let seen = self.coherence.find(x0, x1, hash, k, |p| {
+            let s = slot_of[p as usize];
+            s < DEAD && slots[s as usize].position != NONE
+        });
+        let k = k as u64;
         if let Some(s) = seen.filter(|s| s.order == Order::Fixed) {
             self.counters.by_coherence += 1;
             self.counters.skipped += 3 * (k - 1);
-            let f = &self.faces.faces[s.winner as usize];
-            fill_run(&mut self.frame, self.transform, y, x0, x1, f);
+            let f = &self.slots[self.slot_of[s.winner as usize] as usize];
+            fill_run(&mut self.frame, self.transform, y, x0, x1, &f.plane, f.face);
+            let members = self.active.iter().map(|&a| self.slots[a as usize].polygon);
             self.coherence
-                .remember(x0, x1, hash, &self.active, s.winner, Order::Fixed);
+                .remember((x0, x1), hash, members, s.winner, Order::Fixed);
             return SpanDecision::Coherence;
         }
 
@@ -642,8 +841,8 @@ impl Scanner<'_> {
         let (pl, pr) = (f64::from(x0) + 0.5, f64::from(x1) - 0.5);
         self.keys_left.clear();
         self.keys_right.clear();
-        for &f in &self.active {
-            let p = &self.faces.faces[f as usize].plane;
+        for &s in &self.active {
+            let p = &self.slots[s as usize].plane;
             self.keys_left.push(p.at(pl, py));
             self.keys_right.push(p.at(pr, py));
         }
@@ -668,15 +867,16 @@ impl Scanner<'_> {
         }
         if nearer_all_along {
             self.counters.at_ends += 1;
-            let winner = self.active[w];
-            let f = &self.faces.faces[winner as usize];
-            fill_run(&mut self.frame, self.transform, y, x0, x1, f);
+            let ws = self.active[w];
+            let f = &self.slots[ws as usize];
+            let winner = f.polygon;
+            fill_run(&mut self.frame, self.transform, y, x0, x1, &f.plane, f.face);
             // The same set on the previous row: check once whether the order can
             // change anywhere, so that later rows may skip the comparisons.
             let order = match seen {
                 None => Order::Unknown,
                 Some(s) if s.order == Order::Unknown && s.winner == winner => {
-                    if self.order_is_fixed(winner) {
+                    if self.order_is_fixed(ws) {
                         Order::Fixed
                     } else {
                         Order::MayChange
@@ -684,37 +884,41 @@ impl Scanner<'_> {
                 }
                 Some(_) => Order::MayChange,
             };
+            let members = self.active.iter().map(|&a| self.slots[a as usize].polygon);
             self.coherence
-                .remember(x0, x1, hash, &self.active, winner, order);
+                .remember((x0, x1), hash, members, winner, order);
             return SpanDecision::NearestAtEnds;
         }
 
         self.counters.per_pixel += 1;
         for x in x0..x1 {
             let px = f64::from(x) + 0.5;
-            let mut best = self.active[0];
-            let mut best_key = stored_key(&self.faces.faces[best as usize].plane, px, py);
+            let first = &self.slots[self.active[0] as usize];
+            let (mut best, mut best_key) = (first, stored_key(&first.plane, px, py));
             for &g in &self.active[1..] {
-                let kg = stored_key(&self.faces.faces[g as usize].plane, px, py);
-                if hides(kg, g, best_key, best) {
-                    best = g;
+                let f = &self.slots[g as usize];
+                let kg = stored_key(&f.plane, px, py);
+                if hides(kg, f.polygon, best_key, best.polygon) {
+                    best = f;
                     best_key = kg;
                 }
             }
             self.counters.comparisons += k - 1;
-            let f = &self.faces.faces[best as usize];
-            set_pixel(&mut self.frame, self.transform, x, y, f, best_key);
+            let face = best.face;
+            set_pixel(&mut self.frame, self.transform, x, y, face, best_key);
         }
         SpanDecision::PerPixel
     }
 
-    /// Whether `winner` hides every other active face wherever both can be seen.
+    /// Whether the face in slot `winner` hides every other active face wherever both
+    /// can be seen.
     fn order_is_fixed(&mut self, winner: u32) -> bool {
         self.counters.order_checks += 1;
-        let w = &self.faces.faces[winner as usize];
+        let w = &self.slots[winner as usize];
         for &g in &self.active {
             if g != winner {
-                let (ok, n) = hides_over_overlap(w, &self.faces.faces[g as usize]);
+                let f = &self.slots[g as usize];
+                let (ok, n) = hides_over_overlap(&w.plane, w.rect, &f.plane, f.rect);
                 self.counters.comparisons += n;
                 if !ok {
                     return false;

@@ -209,7 +209,15 @@ impl Subdivision<'_> {
                 let f = &self.faces.faces[fi];
                 if self.relations[start] == Relation::Surrounding {
                     for y in win.y0..win.y1 {
-                        fill_run(&mut self.frame, self.transform, y, win.x0, win.x1, f);
+                        fill_run(
+                            &mut self.frame,
+                            self.transform,
+                            y,
+                            win.x0,
+                            win.x1,
+                            &f.plane,
+                            f.face,
+                        );
                     }
                     self.decided(win, 2);
                 } else {
@@ -218,7 +226,7 @@ impl Subdivision<'_> {
                     for y in r.y0..r.y1 {
                         if let Some((a, b)) = coverage.as_ref().and_then(|c| c.row_span(y)) {
                             let (a, b) = (a.max(win.x0), b.min(win.x1));
-                            fill_run(&mut self.frame, self.transform, y, a, b, f);
+                            fill_run(&mut self.frame, self.transform, y, a, b, &f.plane, f.face);
                         }
                     }
                     self.decided(win, 1);
@@ -232,7 +240,15 @@ impl Subdivision<'_> {
                 if let Some(w) = self.surrounding_nearest(win, start, end) {
                     let f = &self.faces.faces[w as usize];
                     for y in win.y0..win.y1 {
-                        fill_run(&mut self.frame, self.transform, y, win.x0, win.x1, f);
+                        fill_run(
+                            &mut self.frame,
+                            self.transform,
+                            y,
+                            win.x0,
+                            win.x1,
+                            &f.plane,
+                            f.face,
+                        );
                     }
                     self.decided(win, 3);
                 } else {
@@ -308,7 +324,7 @@ impl Subdivision<'_> {
             }
         }
         let f = &self.faces.faces[best as usize];
-        set_pixel(&mut self.frame, self.transform, x, y, f, best_key);
+        set_pixel(&mut self.frame, self.transform, x, y, f.face, best_key);
     }
 
     /// Rule 5: four quarters (two halves of a one-pixel-wide or -high window), each

@@ -4,31 +4,33 @@
 //! with the shared edge function.
 //!
 //! An edge is active on the rows whose sample line `y = j + 0.5` meets it, both end
-//! rows included: a row through a vertex then sees both edges that meet there, which
-//! costs nothing in exactness (a span is the intersection of what every active edge
-//! allows) and means every row of a polygon's sample box has its edges.
+//! rows included, within its polygon's sample box: a row through a vertex then sees
+//! both edges that meet there, which costs nothing in exactness (a span is the
+//! intersection of what every active edge allows) and means every row of a polygon's
+//! sample box has its edges. Horizontal edges never cross a sample line and stay out
+//! of the table: whether a row lying on one is covered is settled by the span check.
+//!
+//! The table holds only `(polygon, edge)` pairs (8 bytes an edge); an edge's function
+//! and slope are set up when it enters the active list, from its polygon's data made
+//! when the polygon's first edge enters. Memory therefore follows the active faces,
+//! not the scene.
 
-use crate::raster::EdgeFunction;
+use crate::raster::{EdgeFunction, sample_rect};
 use crate::view::PreparedView;
 
-use super::screen_faces::ScreenFaces;
-
-/// One edge of the edge table and of the active edge list.
+/// One entry of the active edge list.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ScanEdge {
     /// The canonical edge function (the shared coverage rule).
     pub edge: EdgeFunction,
-    /// Index of its face in the screen faces.
-    pub face: u32,
-    /// Whether the face lies to the right of it (its crossing opens the face's span);
-    /// otherwise the crossing closes it.
-    pub left: bool,
-    /// Bottom end (the top end is the edge function's origin).
-    pub y_max: f64,
     /// Where it crosses the current row's sample line.
     pub x: f64,
     /// `dx/dy`, the seed's `1/m`.
     pub inverse_slope: f64,
+    /// Bottom end (the top end is the edge function's origin).
+    pub y_max: f64,
+    /// The slot of its face among the active faces.
+    pub slot: u32,
     /// The last row it is active on.
     pub last_row: u32,
     /// The face's sample box columns: crossings are clamped to `x_lo..=x_hi`.
@@ -38,6 +40,9 @@ pub(crate) struct ScanEdge {
     /// The crossing pixel of the current row: for a left edge the first pixel inside
     /// it, for a right edge the first pixel past it (`x_hi` when none).
     pub pixel: u32,
+    /// Whether the face lies to the right of it (its crossing opens the face's span);
+    /// otherwise the crossing closes it.
+    pub left: bool,
 }
 
 impl ScanEdge {
@@ -94,84 +99,88 @@ fn first_true(lo: i64, hi: i64, guess: i64, pred: impl Fn(i64) -> bool) -> i64 {
     i
 }
 
+/// An edge of the table: edge `pair` (from vertex `pair` to the next) of a polygon.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TableEdge {
+    /// The polygon's index in the view.
+    pub polygon: u32,
+    /// The edge's index in the polygon.
+    pub pair: u32,
+}
+
 /// Edges bucketed by their first active row (flat arrays).
 #[derive(Debug, Default)]
 pub(crate) struct EdgeTable {
     starts: Vec<u32>,
-    edges: Vec<ScanEdge>,
+    edges: Vec<TableEdge>,
+}
+
+/// The rows `first..=last` on which an edge from `ya` to `yb` (`ya < yb`) of a polygon
+/// whose sample box has rows `y0..y1` is active, if any.
+#[inline]
+pub(crate) fn edge_rows(ya: f64, yb: f64, y0: u32, y1: u32) -> Option<(u32, u32)> {
+    let first = ((ya - 0.5).ceil()).max(f64::from(y0));
+    let last = ((yb - 0.5).floor()).min(f64::from(y1) - 1.0);
+    (first <= last).then(|| (first as u32, last as u32))
 }
 
 impl EdgeTable {
-    /// The table of every non-horizontal edge of `faces`, for an image `height` rows
-    /// high. Horizontal edges never cross a sample line: whether a row on one is
-    /// covered is settled by the per-face span check.
-    pub fn build(view: &PreparedView<'_>, faces: &ScreenFaces, height: u32) -> Self {
-        let mut edges: Vec<ScanEdge> = Vec::with_capacity(faces.len() * 3);
-        let mut first_rows: Vec<u32> = Vec::with_capacity(faces.len() * 3);
-        let mut points: Vec<(f64, f64)> = Vec::new();
-        for (f, face) in faces.faces.iter().enumerate() {
-            points.clear();
-            points.extend(
-                view.polygon(face.polygon as usize)
-                    .vertices()
-                    .map(|v| (v.x, v.y)),
-            );
-            let rect = face.rect;
-            let fns = faces.edges_of(f);
-            let n = points.len();
-            // The coverage made one edge function per pair of distinct consecutive
-            // points, in order: pair them up to get the exact end ordinates.
-            let mut k_fn = 0;
-            for k in 0..n {
-                let (p, q) = (points[k], points[(k + 1) % n]);
-                if p == q {
+    /// The table of every non-horizontal edge of the view's polygons that meets a
+    /// sample line of a `width x height` image within its polygon's sample box.
+    pub fn build(view: &PreparedView<'_>, width: u32, height: u32) -> Self {
+        let mut rows: Vec<u32> = Vec::with_capacity(view.polygon_count() * 3);
+        let mut edges: Vec<TableEdge> = Vec::with_capacity(view.polygon_count() * 3);
+        for (k, poly) in view.polygons().enumerate() {
+            let (mut minx, mut miny) = (f64::INFINITY, f64::INFINITY);
+            let (mut maxx, mut maxy) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+            for v in poly.vertices() {
+                minx = minx.min(v.x);
+                maxx = maxx.max(v.x);
+                miny = miny.min(v.y);
+                maxy = maxy.max(v.y);
+            }
+            // The box the coverage rule will use; no box, no coverage.
+            let Some(rect) = sample_rect(minx, miny, maxx, maxy, width, height) else {
+                continue;
+            };
+            let n = poly.len();
+            for pair in 0..n {
+                let (p, q) = (poly.vertex(pair), poly.vertex((pair + 1) % n));
+                if p.y == q.y {
                     continue;
                 }
-                let Some(&e) = fns.get(k_fn) else { break };
-                k_fn += 1;
-                if e.dy == 0.0 {
-                    continue;
+                if let Some((first, _)) = edge_rows(p.y.min(q.y), p.y.max(q.y), rect.y0, rect.y1) {
+                    rows.push(first);
+                    edges.push(TableEdge {
+                        polygon: k as u32,
+                        pair: pair as u32,
+                    });
                 }
-                let (y_min, y_max) = (p.1.min(q.1), p.1.max(q.1));
-                debug_assert_eq!(y_min, e.oy);
-                let first = ((y_min - 0.5).ceil()).max(f64::from(rect.y0));
-                let last = ((y_max - 0.5).floor()).min(f64::from(rect.y1) - 1.0);
-                if !(first <= last) {
-                    continue;
-                }
-                let inverse_slope = e.dx / e.dy;
-                first_rows.push(first as u32);
-                edges.push(ScanEdge {
-                    edge: e,
-                    face: f as u32,
-                    left: e.sign < 0.0,
-                    y_max,
-                    x: e.ox + (first + 0.5 - e.oy) * inverse_slope,
-                    inverse_slope,
-                    last_row: last as u32,
-                    x_lo: rect.x0,
-                    x_hi: rect.x1,
-                    pixel: rect.x0,
-                });
             }
         }
-        // Bucket by first row with a counting sort (stable: face order in a bucket).
+        // Bucket by first row with a counting sort (stable: polygon order in a bucket).
         let mut starts = vec![0u32; height as usize + 1];
-        for &row in &first_rows {
+        for &row in &rows {
             starts[row as usize + 1] += 1;
         }
         for r in 0..height as usize {
             starts[r + 1] += starts[r];
         }
         let mut next = starts.clone();
-        let mut order = vec![0u32; edges.len()];
-        for (k, &row) in first_rows.iter().enumerate() {
-            order[next[row as usize] as usize] = k as u32;
+        let mut sorted = vec![
+            TableEdge {
+                polygon: 0,
+                pair: 0
+            };
+            edges.len()
+        ];
+        for (&row, &e) in rows.iter().zip(&edges) {
+            sorted[next[row as usize] as usize] = e;
             next[row as usize] += 1;
         }
         EdgeTable {
             starts,
-            edges: order.iter().map(|&k| edges[k as usize]).collect(),
+            edges: sorted,
         }
     }
 
@@ -181,7 +190,7 @@ impl EdgeTable {
     }
 
     /// The edges that become active on `row`.
-    pub fn bucket(&self, row: u32) -> &[ScanEdge] {
+    pub fn bucket(&self, row: u32) -> &[TableEdge] {
         let r = row as usize;
         &self.edges[self.starts[r] as usize..self.starts[r + 1] as usize]
     }
@@ -232,7 +241,7 @@ mod tests {
         let e = EdgeFunction::new((2.2, 0.0), (6.2, 8.0), -1.0, FillRule::TopLeft).unwrap();
         let mut s = ScanEdge {
             edge: e,
-            face: 0,
+            slot: 0,
             left: e.sign < 0.0,
             y_max: 8.0,
             x: 0.0, // deliberately wrong

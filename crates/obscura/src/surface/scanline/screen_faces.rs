@@ -87,14 +87,6 @@ impl ScreenFaces {
         &self.edges[a as usize..b as usize]
     }
 
-    /// Whether face `f` covers pixel `(i, j)`: [`PolygonCoverage::covers`] on the same
-    /// edge functions.
-    #[inline]
-    pub fn covers(&self, f: usize, i: u32, j: u32) -> bool {
-        let (px, py) = (f64::from(i) + 0.5, f64::from(j) + 0.5);
-        self.edges_of(f).iter().all(|e| e.inside(px, py))
-    }
-
     /// The shared coverage of face `f`, rebuilt from its polygon (for
     /// [`PolygonCoverage::row_span`]).
     pub fn coverage(&self, view: &PreparedView<'_>, f: usize) -> Option<PolygonCoverage> {
@@ -150,28 +142,35 @@ pub(crate) fn intersect(a: PixelRect, b: PixelRect) -> PixelRect {
     }
 }
 
-/// Whether `near` hides `far` at every sample both can cover: their depth keys are
-/// affine, so checking the corners of the overlap of their sample boxes (which holds
-/// the overlap of the polygons) with a margin suffices. Conservative: `false` when
-/// the planes cross inside the box even if the polygons do not overlap there.
-/// Returns the number of key comparisons made with the answer.
-pub(crate) fn hides_over_overlap(near: &ScreenFace, far: &ScreenFace) -> (bool, u64) {
-    let r = intersect(near.rect, far.rect);
+/// Whether the face with plane `near` and sample box `near_box` hides the one with
+/// `far` and `far_box` at every sample both can cover: their depth keys are affine,
+/// so checking the corners of the overlap of their sample boxes (which holds the
+/// overlap of the polygons) with a margin suffices. Conservative: `false` when the
+/// planes cross inside the box even if the polygons do not overlap there. Returns the
+/// number of key comparisons made with the answer.
+pub(crate) fn hides_over_overlap(
+    near: &DepthPlane,
+    near_box: PixelRect,
+    far: &DepthPlane,
+    far_box: PixelRect,
+) -> (bool, u64) {
+    let r = intersect(near_box, far_box);
     if r.is_empty() {
         return (true, 0);
     }
     let mut n = 0;
     for (px, py) in corner_samples(r) {
         n += 1;
-        if !surely_nearer(near.plane.at(px, py), far.plane.at(px, py)) {
+        if !surely_nearer(near.at(px, py), far.at(px, py)) {
             return (false, n);
         }
     }
     (true, n)
 }
 
-/// Writes face `f` to pixels `x0..x1` of row `y`: its id and the eye depth of its
-/// stored key (stepped along the row as the seeds do, re-anchored per run).
+/// Writes the face with id `face` and depth-key plane `plane` to pixels `x0..x1` of
+/// row `y`: its id and the eye depth of its stored key (stepped along the row as the
+/// seeds do, re-anchored per run).
 #[inline]
 pub(crate) fn fill_run(
     frame: &mut Frame,
@@ -179,7 +178,8 @@ pub(crate) fn fill_run(
     y: u32,
     x0: u32,
     x1: u32,
-    f: &ScreenFace,
+    plane: &DepthPlane,
+    face: u32,
 ) {
     if x0 >= x1 {
         return;
@@ -187,27 +187,19 @@ pub(crate) fn fill_run(
     let w = frame.width as usize;
     let row = y as usize * w;
     let (a, b) = (row + x0 as usize, row + x1 as usize);
-    let plane = &f.plane;
     let mut z = plane.at(f64::from(x0) + 0.5, f64::from(y) + 0.5);
-    frame.ids[a..b].fill(f.face);
+    frame.ids[a..b].fill(face);
     for d in &mut frame.depth[a..b] {
         *d = t.depth_of_zq(f64::from(z as f32)) as f32;
         z += plane.dzdx;
     }
 }
 
-/// Writes face `f` with stored key `key` to one pixel.
+/// Writes face id `face` with stored key `key` to one pixel.
 #[inline]
-pub(crate) fn set_pixel(
-    frame: &mut Frame,
-    t: &ViewTransform,
-    x: u32,
-    y: u32,
-    f: &ScreenFace,
-    key: f32,
-) {
+pub(crate) fn set_pixel(frame: &mut Frame, t: &ViewTransform, x: u32, y: u32, face: u32, key: f32) {
     let k = frame.index(x, y);
-    frame.ids[k] = f.face;
+    frame.ids[k] = face;
     frame.depth[k] = t.depth_of_zq(f64::from(key)) as f32;
 }
 
