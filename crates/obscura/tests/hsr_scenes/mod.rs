@@ -282,7 +282,7 @@ pub fn random_scene(seed: u64) -> Case {
     let dist = r.range(1.5, 6.0);
     let eye = dir * dist;
     let target = v(r.range(-0.5, 0.5), r.range(-0.5, 0.5), r.range(-0.5, 0.5));
-    let cam = if r.next_u64() % 4 == 0 {
+    let cam = if r.next_u64().is_multiple_of(4) {
         Camera::orthographic(eye, target, DVec3::Y, r.range(1.0, 5.0), 0.1, 20.0)
     } else {
         Camera::perspective(

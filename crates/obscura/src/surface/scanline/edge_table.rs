@@ -121,7 +121,7 @@ pub(crate) struct EdgeTable {
 pub(crate) fn edge_rows(ya: f64, yb: f64, y0: u32, y1: u32) -> Option<(u32, u32)> {
     let first = ((ya - 0.5).ceil()).max(f64::from(y0));
     let last = ((yb - 0.5).floor()).min(f64::from(y1) - 1.0);
-    (first <= last).then(|| (first as u32, last as u32))
+    (first <= last).then_some((first as u32, last as u32))
 }
 
 impl EdgeTable {
