@@ -346,9 +346,14 @@ impl Subdivision<'_> {
             let child = self.members.len();
             for i in start..end {
                 let f = self.members[i];
-                self.counters.classifications += 1;
-                let fu = f as usize;
-                let rel = classify_edges(self.faces.edges_of(fu), self.faces.faces[fu].rect, q);
+                // A face that surrounds a window surrounds its quarters.
+                let rel = if self.relations[i] == Relation::Surrounding {
+                    Relation::Surrounding
+                } else {
+                    self.counters.classifications += 1;
+                    let fu = f as usize;
+                    classify_edges(self.faces.edges_of(fu), self.faces.faces[fu].rect, q)
+                };
                 if rel != Relation::Disjoint {
                     self.members.push(f);
                     self.relations.push(rel);
