@@ -1,0 +1,383 @@
+//! The view pipeline against answers computed independently of it: analytic
+//! projections of a cube, back-face counts from world-space normals, the horizon of an
+//! infinite floor that crosses the eye plane.
+
+use glam::{DMat4, DVec3};
+use obscura::cull::backface::BackfaceMode;
+use obscura::scene::{Camera, ObjectDesc, demo};
+use obscura::surface::{Algorithm, RenderOptions, render};
+use obscura::{BACKGROUND, Frame, PrepareOptions, Scene, Viewport, prepare};
+
+fn zbuffer(scene: &Scene, cam: &Camera, w: u32, h: u32, opts: &PrepareOptions) -> Frame {
+    let vp = Viewport::new(u64::from(w), u64::from(h)).unwrap();
+    let view = prepare(scene, cam, vp, opts).unwrap();
+    render(Algorithm::ZBuffer, &view, &RenderOptions::default())
+        .unwrap()
+        .0
+}
+
+/// Projects a world point with the textbook formulas, independently of obscura's
+/// matrices: returns pixel coordinates (x right, y down).
+fn project(cam: &Camera, w: f64, h: f64, p: DVec3) -> (f64, f64) {
+    let f = (cam.target - cam.eye).normalize();
+    let r = f.cross(cam.up).normalize();
+    let u = r.cross(f);
+    let d = p - cam.eye;
+    let (x, y, z) = (d.dot(r), d.dot(u), d.dot(f));
+    let (nx, ny) = match cam.projection {
+        obscura::Projection::Perspective { fov_y_degrees } => {
+            let t = (fov_y_degrees.to_radians() / 2.0).tan();
+            (x / z / (t * w / h), y / z / t)
+        }
+        obscura::Projection::Orthographic { height } => {
+            (x / (height / 2.0 * w / h), y / (height / 2.0))
+        }
+    };
+    ((nx + 1.0) / 2.0 * w, (1.0 - ny) / 2.0 * h)
+}
+
+/// Whether a point is inside a convex polygon (either winding), strictly, by cross
+/// products; `None` when it is within `eps` of an edge (ambiguous by construction).
+fn inside_convex(poly: &[(f64, f64)], p: (f64, f64), eps: f64) -> Option<bool> {
+    let n = poly.len();
+    let mut sign = 0.0;
+    for k in 0..n {
+        let (a, b) = (poly[k], poly[(k + 1) % n]);
+        let (ex, ey) = (b.0 - a.0, b.1 - a.1);
+        let c = ex * (p.1 - a.1) - ey * (p.0 - a.0);
+        let dist = c / (ex * ex + ey * ey).sqrt();
+        if dist.abs() < eps {
+            return None;
+        }
+        if sign == 0.0 {
+            sign = dist.signum();
+        } else if dist.signum() != sign {
+            return Some(false);
+        }
+    }
+    Some(true)
+}
+
+#[test]
+fn cube_head_on_covers_the_expected_square() {
+    // Unit cube, eye 2.5 in front of its centre, 90 degree fov: the front face (depth 2)
+    // spans [-0.25, 0.25] of the half-width, pixels [37.5, 62.5) on a 100 px image; by the
+    // top-left rule the left and top edges (through pixel centres) are in, right and
+    // bottom out: columns and rows 37..=61, 25 x 25 pixels, all of face 5 (+z).
+    let scene = demo::cube();
+    let cam = Camera::perspective(
+        DVec3::new(0., 0., 2.5),
+        DVec3::ZERO,
+        DVec3::Y,
+        90.0,
+        0.1,
+        10.0,
+    );
+    let f = zbuffer(&scene, &cam, 100, 100, &PrepareOptions::default());
+    for j in 0..100 {
+        for i in 0..100 {
+            let inside = (37..=61).contains(&i) && (37..=61).contains(&j);
+            assert_eq!(
+                f.id(i, j),
+                if inside { 5 } else { BACKGROUND },
+                "pixel {i},{j}"
+            );
+            if inside {
+                assert!((f.depth[f.index(i, j)] - 2.0).abs() < 1e-5);
+            }
+        }
+    }
+}
+
+/// A face id, its projected polygon and whether it faces the camera.
+type ProjectedFace = (u32, Vec<(f64, f64)>, bool);
+
+#[test]
+fn cube_from_known_cameras_covers_the_projected_faces() {
+    // For several cameras, project each face of the cube with the textbook formulas and
+    // check, pixel by pixel, that the frame shows a face whose projection contains the
+    // pixel centre and is front-facing, and background outside the silhouette.
+    let scene = demo::cube();
+    let cube = &scene.objects()[0];
+    let cams = [
+        Camera::perspective(
+            DVec3::new(1.7, 1.3, 2.2),
+            DVec3::ZERO,
+            DVec3::Y,
+            50.0,
+            0.1,
+            10.0,
+        ),
+        Camera::perspective(
+            DVec3::new(-2.0, -1.1, 1.5),
+            DVec3::new(0.1, 0.0, -0.1),
+            DVec3::Y,
+            70.0,
+            0.5,
+            8.0,
+        ),
+        Camera::orthographic(
+            DVec3::new(2.0, 2.5, -3.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            2.5,
+            0.1,
+            10.0,
+        ),
+        Camera::perspective(
+            DVec3::new(0.3, 3.0, 0.2),
+            DVec3::ZERO,
+            DVec3::Z,
+            60.0,
+            0.1,
+            10.0,
+        ),
+    ];
+    let (w, h) = (96u32, 72u32);
+    for cam in cams {
+        let f = zbuffer(&scene, &cam, w, h, &PrepareOptions::default());
+        let (right, up, fwd) = cam.basis();
+        let _ = (right, up);
+        let faces: Vec<ProjectedFace> = (0..6)
+            .map(|p| {
+                let pts = cube.world_polygon(p);
+                let n = (pts[1] - pts[0]).cross(pts[2] - pts[0]);
+                let to_eye = match cam.projection {
+                    obscura::Projection::Perspective { .. } => cam.eye - pts[0],
+                    obscura::Projection::Orthographic { .. } => -fwd,
+                };
+                let front = n.dot(to_eye) > 0.0;
+                (
+                    p as u32,
+                    pts.iter()
+                        .map(|&q| project(&cam, f64::from(w), f64::from(h), q))
+                        .collect(),
+                    front,
+                )
+            })
+            .collect();
+        let mut checked = 0;
+        for j in 0..h {
+            for i in 0..w {
+                let c = (f64::from(i) + 0.5, f64::from(j) + 0.5);
+                let mut containing = Vec::new();
+                let mut ambiguous = false;
+                for (id, poly, front) in &faces {
+                    if !front {
+                        continue;
+                    }
+                    match inside_convex(poly, c, 1e-6) {
+                        Some(true) => containing.push(*id),
+                        Some(false) => {}
+                        None => ambiguous = true,
+                    }
+                }
+                if ambiguous {
+                    continue;
+                }
+                checked += 1;
+                let got = f.id(i, j);
+                match containing.as_slice() {
+                    [] => assert_eq!(got, BACKGROUND, "pixel {i},{j} should be background"),
+                    [only] => assert_eq!(got, *only, "pixel {i},{j}"),
+                    more => panic!("front faces of a convex solid overlap at {i},{j}: {more:?}"),
+                }
+            }
+        }
+        assert!(checked > (w * h) as usize * 9 / 10);
+    }
+}
+
+#[test]
+fn backface_culling_removes_exactly_the_faces_facing_away() {
+    // Count, in world space, the faces whose outward normal has the eye strictly on its
+    // positive side; the pipeline's back-face stage must keep exactly those.
+    let meshes = [
+        ("sphere", demo::uv_sphere_mesh(1.0, 24, 12), DMat4::IDENTITY),
+        (
+            "torus",
+            demo::torus_mesh(1.0, 0.35, 20, 10),
+            DMat4::from_rotation_x(0.7),
+        ),
+        (
+            "cone",
+            demo::cone_mesh(0.8, 1.5, 17),
+            DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0)),
+        ),
+    ];
+    let eyes = [
+        DVec3::new(0.3, 0.4, 3.0),
+        DVec3::new(-2.5, 1.2, -0.7),
+        DVec3::new(0.05, -3.1, 0.2),
+    ];
+    for (name, mesh, transform) in meshes {
+        let mut scene = Scene::new();
+        scene
+            .add(ObjectDesc::new(name, mesh).with_transform(transform))
+            .unwrap();
+        let o = &scene.objects()[0];
+        assert!(o.closed, "{name} must be detected closed");
+        for eye in eyes {
+            let cam = Camera::perspective(eye, DVec3::ZERO, DVec3::Y, 60.0, 0.01, 100.0);
+            let vp = Viewport::new(32, 32).unwrap();
+            let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+            let stage = &view.stats().stages[2];
+            assert_eq!(stage.unit, "faces");
+            let expected = (0..o.mesh.polygon_count())
+                .filter(|&p| {
+                    let pts = o.world_polygon(p);
+                    // A mirroring transform reverses the winding: the outward normal flips.
+                    let n =
+                        obscura::geom::newell_normal(&pts) * if o.mirrored { -1.0 } else { 1.0 };
+                    n.dot(eye - pts[0]) > 1e-12
+                })
+                .count();
+            assert_eq!(stage.input as usize, o.mesh.polygon_count());
+            assert_eq!(stage.output as usize, expected, "{name} from {eye}");
+            // Off: nothing is culled.
+            let off = prepare(
+                &scene,
+                &cam,
+                vp,
+                &PrepareOptions::default().with_backface(BackfaceMode::Off),
+            )
+            .unwrap();
+            assert_eq!(
+                off.stats().stages[2].output as usize,
+                o.mesh.polygon_count()
+            );
+        }
+    }
+}
+
+#[test]
+fn open_meshes_keep_their_back_faces_unless_told() {
+    let mut scene = Scene::new();
+    scene
+        .add(ObjectDesc::new("sheet", demo::grid_mesh(2.0, 2.0, 4, 4)))
+        .unwrap();
+    assert!(!scene.objects()[0].closed);
+    // Seen from below: every face faces away.
+    let cam = Camera::perspective(
+        DVec3::new(0.0, -3.0, 0.1),
+        DVec3::ZERO,
+        DVec3::Y,
+        60.0,
+        0.1,
+        10.0,
+    );
+    let vp = Viewport::new(40, 40).unwrap();
+    let shown = zbuffer(&scene, &cam, 40, 40, &PrepareOptions::default());
+    assert!(shown.covered_pixels() > 100);
+    let all = prepare(
+        &scene,
+        &cam,
+        vp,
+        &PrepareOptions::default().with_backface(BackfaceMode::All),
+    )
+    .unwrap();
+    assert_eq!(all.polygon_count(), 0);
+}
+
+#[test]
+fn camera_inside_a_closed_object() {
+    // From inside a closed cube every face is a back face: culled by default (nothing is
+    // seen, no panic), visible with back-face culling off.
+    let scene = demo::cube();
+    let cam = Camera::perspective(
+        DVec3::new(0.1, 0.05, 0.2),
+        DVec3::new(0.1, 0.05, -1.0),
+        DVec3::Y,
+        90.0,
+        0.01,
+        10.0,
+    );
+    let culled = zbuffer(&scene, &cam, 32, 32, &PrepareOptions::default());
+    assert_eq!(culled.covered_pixels(), 0);
+    let seen = zbuffer(
+        &scene,
+        &cam,
+        32,
+        32,
+        &PrepareOptions::default().with_backface(BackfaceMode::Off),
+    );
+    assert_eq!(seen.covered_pixels(), 32 * 32);
+    // Looking down -z from inside, the centre pixel shows the -z face (id 4) at depth 0.7.
+    assert_eq!(seen.id(16, 16), 4);
+    assert!((seen.depth[seen.index(16, 16)] - 0.7).abs() < 1e-5);
+}
+
+#[test]
+fn floor_crossing_the_eye_plane_shows_the_exact_horizon() {
+    // An open floor y = 0 of 2000 x 2000 around an eye at height 1 looking along -z: the
+    // floor extends behind the eye (w <= 0), so it must be clipped before the divide.
+    // Pixel row j is floor iff its centre ray goes down and meets the floor before `far`.
+    let mut scene = Scene::new();
+    scene
+        .add(ObjectDesc::new(
+            "floor",
+            demo::grid_mesh(2000.0, 2000.0, 1, 1),
+        ))
+        .unwrap();
+    let (w, h) = (64u32, 48u32);
+    let far = 50.0;
+    let cam = Camera::perspective(
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(0.0, 1.0, -1.0),
+        DVec3::Y,
+        60.0,
+        0.1,
+        far,
+    );
+    let f = zbuffer(&scene, &cam, w, h, &PrepareOptions::default());
+    let t = (30f64).to_radians().tan();
+    for j in 0..h {
+        let ny = 1.0 - 2.0 * (f64::from(j) + 0.5) / f64::from(h); // ray slope at depth 1
+        for i in 0..w {
+            let nx = 2.0 * (f64::from(i) + 0.5) / f64::from(w) - 1.0;
+            let dir_y = ny * t;
+            // depth of the hit along -z: 1 / -dir_y
+            let expected = dir_y < 0.0 && 1.0 / -dir_y <= far;
+            let margin = ((1.0 / -dir_y) - far).abs() > 1e-3 * far;
+            if !margin {
+                continue;
+            }
+            let _ = nx;
+            assert_eq!(f.id(i, j) != BACKGROUND, expected, "pixel {i},{j}");
+            if expected {
+                let d = f64::from(f.depth[f.index(i, j)]);
+                assert!((d - 1.0 / -dir_y).abs() < 1e-4 * d, "depth at {i},{j}: {d}");
+            }
+        }
+    }
+}
+
+#[test]
+fn frustum_culling_of_objects_changes_nothing_but_the_work() {
+    let scene = demo::city(12, 12, 3);
+    let cam = Camera::perspective(
+        DVec3::new(3.0, 2.0, 3.0),
+        DVec3::new(-2.0, 0.5, -1.0),
+        DVec3::Y,
+        40.0,
+        0.1,
+        40.0,
+    );
+    let vp = Viewport::new(120, 90).unwrap();
+    let on = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+    let mut no_cull = PrepareOptions::default();
+    no_cull.frustum_cull_objects = false;
+    let off = prepare(&scene, &cam, vp, &no_cull).unwrap();
+    let objects = &on.stats().stages[0];
+    assert!(
+        objects.output < objects.input,
+        "some buildings are outside the view"
+    );
+    let a = render(Algorithm::ZBuffer, &on, &RenderOptions::default())
+        .unwrap()
+        .0;
+    let b = render(Algorithm::ZBuffer, &off, &RenderOptions::default())
+        .unwrap()
+        .0;
+    assert_eq!(a.ids, b.ids);
+}
