@@ -82,6 +82,30 @@ fn ceil_within(v: f64, lo: i64, hi: i64) -> i64 {
     if (t as f64) < v { t + 1 } else { t }
 }
 
+/// Above this every `f64` is an integer.
+const ALL_INTEGERS: f64 = 4_503_599_627_370_496.0;
+
+/// `v.ceil()` by truncation (no C library call on targets without a rounding
+/// instruction); NaN stays NaN.
+#[inline(always)]
+fn round_up(v: f64) -> f64 {
+    if !(v.abs() < ALL_INTEGERS) {
+        return v;
+    }
+    let t = v as i64 as f64;
+    if t < v { t + 1.0 } else { t }
+}
+
+/// `v.floor()` by truncation; NaN stays NaN.
+#[inline(always)]
+fn round_down(v: f64) -> f64 {
+    if !(v.abs() < ALL_INTEGERS) {
+        return v;
+    }
+    let t = v as i64 as f64;
+    if t > v { t - 1.0 } else { t }
+}
+
 /// The first `i` in `lo..hi` where the monotone predicate (false then true) holds,
 /// or `hi`, searched from `guess`.
 #[inline]
@@ -119,8 +143,8 @@ pub(crate) struct EdgeTable {
 /// whose sample box has rows `y0..y1` is active, if any.
 #[inline]
 pub(crate) fn edge_rows(ya: f64, yb: f64, y0: u32, y1: u32) -> Option<(u32, u32)> {
-    let first = ((ya - 0.5).ceil()).max(f64::from(y0));
-    let last = ((yb - 0.5).floor()).min(f64::from(y1) - 1.0);
+    let first = round_up(ya - 0.5).max(f64::from(y0));
+    let last = round_down(yb - 0.5).min(f64::from(y1) - 1.0);
     (first <= last).then_some((first as u32, last as u32))
 }
 
@@ -222,6 +246,32 @@ mod tests {
             };
             assert_eq!(ceil_within(v, 2, 12), expected, "{v}");
         }
+    }
+
+    #[test]
+    fn rounding_by_truncation_matches_the_library() {
+        for v in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.5,
+            -2.5,
+            1e-300,
+            -1e-300,
+            7.999_999_999,
+            -7.999_999_999,
+            1e15 + 0.5,
+            -1e15 - 0.5,
+            1e20,
+            -1e20,
+        ] {
+            assert_eq!(round_up(v), v.ceil(), "{v}");
+            assert_eq!(round_down(v), v.floor(), "{v}");
+        }
+        assert!(round_up(f64::NAN).is_nan() && round_down(f64::INFINITY).is_infinite());
     }
 
     #[test]
