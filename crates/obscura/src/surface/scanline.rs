@@ -331,10 +331,15 @@ struct Scanner<'v> {
     free_slots: Vec<u32>,
     faces_active: usize,
     touched: Vec<u32>,
-    active_edges: Vec<ScanEdge>,
-    incoming: Vec<ScanEdge>,
-    incoming_order: Vec<(u32, u32)>,
-    merged: Vec<ScanEdge>,
+    /// The edges of the active edge list, at stable places (a slab with free places).
+    edge_store: Vec<ScanEdge>,
+    free_edges: Vec<u32>,
+    /// The active edge list proper: `(crossing pixel, place in edge_store)`, sorted.
+    /// Sorting these small entries instead of the edges keeps the per-row sort and
+    /// merge cheap when thousands of edges are active.
+    active_edges: Vec<(u32, u32)>,
+    incoming: Vec<(u32, u32)>,
+    merged: Vec<(u32, u32)>,
     crossings: Vec<Crossing>,
     /// The slots whose flag is in.
     active: Vec<u32>,
@@ -367,9 +372,10 @@ fn run(
         free_slots: Vec::new(),
         faces_active: 0,
         touched: Vec::new(),
+        edge_store: Vec::new(),
+        free_edges: Vec::new(),
         active_edges: Vec::new(),
         incoming: Vec::new(),
-        incoming_order: Vec::new(),
         merged: Vec::new(),
         crossings: Vec::new(),
         active: Vec::new(),
@@ -469,7 +475,7 @@ impl Scanner<'_> {
             debug_assert_eq!(ya, e.oy);
             let inverse_slope = e.dx / e.dy;
             f.edges_active += 1;
-            self.incoming.push(ScanEdge {
+            let edge = ScanEdge {
                 edge: e,
                 x: e.ox + (f64::from(y) + 0.5 - e.oy) * inverse_slope,
                 inverse_slope,
@@ -480,7 +486,18 @@ impl Scanner<'_> {
                 x_hi: f.rect.x1,
                 pixel: f.rect.x0,
                 left: e.sign < 0.0,
-            });
+            };
+            let place = match self.free_edges.pop() {
+                Some(k) => {
+                    self.edge_store[k as usize] = edge;
+                    k
+                }
+                None => {
+                    self.edge_store.push(edge);
+                    (self.edge_store.len() - 1) as u32
+                }
+            };
+            self.incoming.push((0, place));
         }
     }
 
@@ -578,8 +595,10 @@ impl Scanner<'_> {
         let py = f64::from(y) + 0.5;
         self.touched.clear();
         let mut corrections = 0;
-        for e in self.active_edges.iter_mut().chain(self.incoming.iter_mut()) {
+        for entry in self.active_edges.iter_mut().chain(self.incoming.iter_mut()) {
+            let e = &mut self.edge_store[entry.1 as usize];
             corrections += e.cross(py);
+            entry.0 = e.pixel;
             let f = &mut self.slots[e.slot as usize];
             if f.stamp != y {
                 f.stamp = y;
@@ -594,24 +613,17 @@ impl Scanner<'_> {
             }
         }
         self.counters.corrections += corrections;
-        insertion_sort_by_key(&mut self.active_edges, |e| e.pixel);
+        insertion_sort_by_key(&mut self.active_edges, |e| e.0);
         if !self.incoming.is_empty() {
-            self.incoming_order.clear();
-            self.incoming_order.extend(
-                self.incoming
-                    .iter()
-                    .enumerate()
-                    .map(|(k, e)| (e.pixel, k as u32)),
-            );
-            self.incoming_order.sort_unstable();
+            self.incoming.sort_unstable_by_key(|e| e.0);
             self.merged.clear();
             let mut a = 0;
-            for &(pixel, k) in &self.incoming_order {
-                while a < self.active_edges.len() && self.active_edges[a].pixel <= pixel {
+            for &entry in &self.incoming {
+                while a < self.active_edges.len() && self.active_edges[a].0 <= entry.0 {
                     self.merged.push(self.active_edges[a]);
                     a += 1;
                 }
-                self.merged.push(self.incoming[k as usize]);
+                self.merged.push(entry);
             }
             self.merged.extend_from_slice(&self.active_edges[a..]);
             std::mem::swap(&mut self.active_edges, &mut self.merged);
@@ -623,6 +635,7 @@ impl Scanner<'_> {
             t.active_edges = self
                 .active_edges
                 .iter()
+                .map(|&(_, k)| &self.edge_store[k as usize])
                 .map(|e| ActiveEdge {
                     face: self.slots[e.slot as usize].face,
                     y_min: e.edge.oy,
@@ -671,7 +684,8 @@ impl Scanner<'_> {
     /// left edge and leaves at its right edge (at its exact span ends).
     fn emit_crossings(&mut self) {
         self.crossings.clear();
-        for e in &self.active_edges {
+        for &(_, k) in &self.active_edges {
+            let e = &self.edge_store[k as usize];
             let f = &mut self.slots[e.slot as usize];
             if f.lo >= f.hi {
                 continue;
@@ -740,9 +754,13 @@ impl Scanner<'_> {
         let slots = &mut self.slots;
         let free = &mut self.free_slots;
         let slot_of = &mut self.slot_of;
+        let store = &mut self.edge_store;
+        let free_edges = &mut self.free_edges;
         let mut ended = 0;
-        self.active_edges.retain_mut(|e| {
+        self.active_edges.retain(|&(_, k)| {
+            let e = &mut store[k as usize];
             if e.last_row == y {
+                free_edges.push(k);
                 let f = &mut slots[e.slot as usize];
                 f.edges_active -= 1;
                 if f.edges_active == 0 {
