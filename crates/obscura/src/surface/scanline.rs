@@ -170,6 +170,8 @@ struct ActiveFace {
     points: Vec<(f64, f64)>,
     /// How many of its edges are in the active edge list.
     edges_active: u32,
+    /// Which of its first 64 edges are active on this row.
+    active_mask: u64,
     // This row's span, the row it was computed for, which crossings were emitted,
     // and its place in the active set (`NONE`: flag out).
     lo: u32,
@@ -477,6 +479,7 @@ impl Scanner<'_> {
             f.edges_active += 1;
             let edge = ScanEdge {
                 edge: e,
+                index: k,
                 x: e.ox + (f64::from(y) + 0.5 - e.oy) * inverse_slope,
                 inverse_slope,
                 y_max: yb,
@@ -528,6 +531,7 @@ impl Scanner<'_> {
                     pair_edge: Vec::new(),
                     points: Vec::new(),
                     edges_active: 0,
+                    active_mask: 0,
                     lo: 0,
                     hi: 0,
                     stamp: NONE,
@@ -604,7 +608,11 @@ impl Scanner<'_> {
                 f.stamp = y;
                 f.lo = e.x_lo;
                 f.hi = e.x_hi;
+                f.active_mask = 0;
                 self.touched.push(e.slot);
+            }
+            if e.index < 64 {
+                f.active_mask |= 1 << e.index;
             }
             if e.left {
                 f.lo = f.lo.max(e.pixel);
@@ -661,7 +669,15 @@ impl Scanner<'_> {
                 continue;
             }
             let (pa, pb) = (f64::from(a) + 0.5, f64::from(b) - 0.5);
-            let exact = f.edges.iter().all(|e| {
+            // Every edge active on this row holds both ends inside by construction
+            // (a left edge's crossing is its first inside pixel, and is at or left of
+            // the span's start; a right edge's is its first outside pixel, at or
+            // right of the span's end): only the others need a test.
+            let skip = f.active_mask;
+            let exact = f.edges.iter().enumerate().all(|(k, e)| {
+                if k < 64 && skip & (1 << k) != 0 {
+                    return true;
+                }
                 let row = e.row_term(py);
                 e.inside_row(pa, row) && e.inside_row(pb, row)
             });

@@ -31,6 +31,8 @@ pub(crate) struct ScanEdge {
     pub y_max: f64,
     /// The slot of its face among the active faces.
     pub slot: u32,
+    /// Its index among its face's edge functions.
+    pub index: u32,
     /// The last row it is active on.
     pub last_row: u32,
     /// The face's sample box columns: crossings are clamped to `x_lo..=x_hi`.
@@ -292,6 +294,7 @@ mod tests {
         let mut s = ScanEdge {
             edge: e,
             slot: 0,
+            index: 0,
             left: e.sign < 0.0,
             y_max: 8.0,
             x: 0.0, // deliberately wrong
