@@ -18,10 +18,13 @@
 //!   ([`crate::raster::EdgeFunction::inside_row`]), correcting the incremental guess;
 //!   the list is kept sorted by crossing (insertion sort: the order barely changes
 //!   from one row to the next; new edges are merged in).
-//! - A face's span on the row runs from its left crossing to its right one; two more
-//!   pixel tests (its first and last pixel against all its edges) prove it equals the
-//!   shared coverage rule, and the rare row where they fail (a sample exactly on a
-//!   vertex, a bottom edge) takes [`crate::raster::PolygonCoverage::row_span`].
+//! - A face's span on the row runs from its left crossing to its right one. Coverage
+//!   along a row is an interval, every pixel outside the crossings is outside an
+//!   edge, and the active edges hold both ends of the span by construction, so
+//!   testing the span's first and last pixel against the face's *other* edges proves
+//!   it equals the shared coverage rule; the rare row where that fails (a bottom edge
+//!   lying on the row's sample line, a sample on a vertex) takes
+//!   [`crate::raster::PolygonCoverage::row_span`].
 //! - Walking the crossings in order flips the faces' flags. A span with no face is
 //!   background; with one face it is filled without any depth comparison; with several,
 //!   the depth-key planes are compared at both ends of the span: if one face is nearer
@@ -48,7 +51,9 @@
 //!
 //! Limitations: depth is exact for planar polygons (every prepared polygon is);
 //! near-ties are decided on the `f32` keys the z-buffer stores, so the two agree
-//! there too unless the z-buffer's own rounding path differs.
+//! there too unless the z-buffer's own rounding path differs. The order check behind
+//! coherence is conservative: faces that touch (a wall standing on a floor) never
+//! pass it, so their spans keep being compared at their ends. Single-threaded.
 
 mod edge_table;
 pub(crate) mod screen_faces;
