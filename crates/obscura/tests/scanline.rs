@@ -333,3 +333,25 @@ fn degenerate_polygons_are_skipped_without_panic() {
     let stats = case.assert_matches_zbuffer(ALGO);
     assert_eq!(stats.get("spans"), Some(0.0));
 }
+
+#[test]
+fn a_single_face_is_drawn_without_any_depth_comparison() {
+    // A triangle (2,1) (13,4) (5,10) in pixels: every span holds that one face.
+    let flip = |x: f64, y: f64| DVec3::new(x, 12.0 - y, 0.0);
+    let polys = vec![vec![flip(2.0, 1.0), flip(13.0, 4.0), flip(5.0, 10.0)]];
+    let cam = Camera::orthographic(
+        DVec3::new(8.0, 6.0, 10.0),
+        DVec3::new(8.0, 6.0, 0.0),
+        DVec3::Y,
+        12.0,
+        1.0,
+        20.0,
+    );
+    let case = Case::new("single triangle", scene_of(&polys), cam, 16, 12);
+    let stats = case.assert_matches_zbuffer(ALGO);
+    // Rows 1..=9 (sample lines 1.5 .. 9.5) each hold one span of the triangle.
+    assert_eq!(stats.get("spans"), Some(9.0));
+    assert_eq!(stats.get("spans_without_comparison"), Some(9.0));
+    assert_eq!(stats.get("depth_comparisons"), Some(0.0));
+    assert_eq!(stats.get("edges"), Some(3.0));
+}
