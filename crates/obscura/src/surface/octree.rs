@@ -17,7 +17,8 @@
 //!   source face (the face nearest to the voxel's centre); the depth is where the ray
 //!   enters the voxel (at least `near`): the ray parameter of [`crate::scene::Camera::ray`]
 //!   is the eye-space depth, so no conversion is needed. Full voxels are passed through:
-//!   a ray from outside every solid always meets the boundary first.
+//!   a ray from outside every solid always meets the boundary first, and an eye inside
+//!   a solid sees its boundary voxels from inside.
 //! - Approximation: the image is the scene's voxelization, not its polygons
 //!   ([`crate::surface::Algorithm::is_exact`] is false). Silhouettes grow by up to a voxel
 //!   (a voxel is Partial as soon as a face touches it), depths are early by up to a

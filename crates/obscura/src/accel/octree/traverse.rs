@@ -22,9 +22,10 @@
 //!   positive one (1e-100), which keeps every parameter finite and the ray's side of
 //!   each plane right.
 //! - Full leaves are passed through: a ray from outside the solids meets a Partial
-//!   voxel before any Full one (Full and Empty cells never touch), so a Full leaf is
-//!   reached first only when the ray starts inside a solid, where the z-buffer too shows
-//!   what lies beyond (the solid's faces are back faces from inside).
+//!   voxel before any Full one (Full and Empty cells never touch), so only a ray that
+//!   starts inside a solid reaches a Full leaf first; it goes on to the solid's boundary
+//!   voxels and stops there, seeing the solid from inside (where the z-buffer, culling
+//!   back faces, would show what lies beyond).
 //! - Complexity: O(depth) nodes per voxel crossed, at most O(2^depth) voxels per ray.
 
 use glam::DVec3;
