@@ -76,6 +76,7 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
     stats.set("sat_tests", b.sat_tests as f64);
     stats.set("components", b.components as f64);
     stats.set("inside_queries", b.inside_queries as f64);
+    stats.set("triangles_ms", b.triangles_ms);
     stats.set("subdivide_ms", b.subdivide_ms);
     stats.set("classify_ms", b.classify_ms);
     stats.set("merge_ms", b.compact_ms);

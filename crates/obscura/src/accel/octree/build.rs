@@ -78,24 +78,41 @@ impl TriangleSoup {
     #[must_use]
     pub fn from_scene(scene: &Scene) -> Self {
         let mut soup = TriangleSoup::new();
-        let mut world = Vec::new();
+        soup.triangles.reserve(scene.triangle_count());
+        soup.faces.reserve(scene.triangle_count());
+        let (mut world, mut order) = (Vec::new(), Vec::new());
         for o in scene.objects() {
             let start = soup.triangles.len();
-            for p in 0..o.mesh.polygon_count() {
-                world.clear();
-                world.extend(
-                    o.mesh
-                        .polygon(p)
-                        .iter()
-                        .map(|&v| o.transform.transform_point3(o.mesh.positions()[v as usize])),
-                );
+            // Each vertex once, as `Object::world_polygon` computes it.
+            world.clear();
+            world.extend(
+                o.mesh
+                    .positions()
+                    .iter()
+                    .map(|&p| o.transform.transform_point3(p)),
+            );
+            // Polygons along a Morton curve (see `morton_key`), so no triangle is
+            // moved afterwards.
+            order.clear();
+            order.extend((0..o.mesh.polygon_count()).map(|p| {
+                let poly = o.mesh.polygon(p);
+                let centre =
+                    poly.iter().map(|&v| world[v as usize]).sum::<DVec3>() / poly.len() as f64;
+                (u64::from(morton_key(centre, &o.bounds)) << 32) | p as u64
+            }));
+            order.sort_unstable();
+            for &key in &order {
+                let p = (key & 0xffff_ffff) as usize;
+                let poly = o.mesh.polygon(p);
                 let face = o.first_face + o.mesh.polygon_face(p);
-                for k in 1..world.len().saturating_sub(1) {
-                    soup.triangles.push([world[0], world[k], world[k + 1]]);
+                let v0 = world[poly[0] as usize];
+                for k in 1..poly.len().saturating_sub(1) {
+                    soup.triangles
+                        .push([v0, world[poly[k] as usize], world[poly[k + 1] as usize]]);
                     soup.faces.push(face);
                 }
             }
-            soup.finish_object(start, o.closed);
+            soup.finish_object(start, o.closed, false);
         }
         soup
     }
@@ -118,14 +135,16 @@ impl TriangleSoup {
                 skipped += 1;
             }
         }
-        self.finish_object(start, closed && skipped == 0);
+        self.finish_object(start, closed && skipped == 0, true);
         skipped
     }
 
-    fn finish_object(&mut self, start: usize, closed: bool) {
+    fn finish_object(&mut self, start: usize, closed: bool, sort: bool) {
         let end = self.triangles.len();
         let bounds = Aabb::from_points(self.triangles[start..end].iter().flatten().copied());
-        self.sort_along_morton_curve(start, end, &bounds);
+        if sort {
+            self.sort_along_morton_curve(start, end, &bounds);
+        }
         self.objects.push(SoupObject {
             start,
             end,
@@ -134,40 +153,18 @@ impl TriangleSoup {
         });
     }
 
-    /// Orders an object's triangles along a Morton (Z-order) curve through its box, so
-    /// that the triangles meeting one cell are close in memory: the subdivision walks
-    /// each cell's list once per level, and with this order that walk is nearly
-    /// sequential. The order changes no result (ties between triangles are broken by
-    /// face id).
+    /// Orders an object's triangles along a Morton curve (see [`morton_key`]).
     fn sort_along_morton_curve(&mut self, start: usize, end: usize, bounds: &Aabb) {
-        if end - start < 2 {
-            return;
-        }
-        let scale = DVec3::splat(1023.0) / bounds.extent().max(DVec3::splat(f64::MIN_POSITIVE));
-        let spread = |v: u32| {
-            // 10 bits to every third bit of 30.
-            let mut x = v & 0x3ff;
-            x = (x | (x << 16)) & 0x0300_00ff;
-            x = (x | (x << 8)) & 0x0300_f00f;
-            x = (x | (x << 4)) & 0x030c_30c3;
-            (x | (x << 2)) & 0x0924_9249
-        };
-        let mut keyed: Vec<(u32, u32)> = (start..end)
+        let mut keyed: Vec<u64> = (start..end)
             .map(|i| {
                 let t = &self.triangles[i];
-                let q = (((t[0] + t[1] + t[2]) / 3.0 - bounds.min) * scale)
-                    .clamp(DVec3::ZERO, DVec3::splat(1023.0));
-                let key =
-                    spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2);
-                (key, i as u32)
+                (u64::from(morton_key((t[0] + t[1] + t[2]) / 3.0, bounds)) << 32) | i as u64
             })
             .collect();
         keyed.sort_unstable();
-        let triangles: Vec<[DVec3; 3]> = keyed
-            .iter()
-            .map(|&(_, i)| self.triangles[i as usize])
-            .collect();
-        let faces: Vec<u32> = keyed.iter().map(|&(_, i)| self.faces[i as usize]).collect();
+        let index = |k: &u64| (k & 0xffff_ffff) as usize;
+        let triangles: Vec<[DVec3; 3]> = keyed.iter().map(|k| self.triangles[index(k)]).collect();
+        let faces: Vec<u32> = keyed.iter().map(|k| self.faces[index(k)]).collect();
         self.triangles[start..end].copy_from_slice(&triangles);
         self.faces[start..end].copy_from_slice(&faces);
     }
@@ -225,6 +222,25 @@ impl TriangleSoup {
                     && o.bounds.max.cmplt(region.max()).all())
         })
     }
+}
+
+/// The position of a point along a Morton (Z-order) curve through a box, 10 bits per
+/// axis. Triangles are kept in this order so that those meeting one cell are close in
+/// memory: the subdivision walks each cell's list once per level, and in this order the
+/// walk is nearly sequential. The order changes no result (ties between triangles are
+/// broken by face id).
+fn morton_key(p: DVec3, bounds: &Aabb) -> u32 {
+    let scale = DVec3::splat(1023.0) / bounds.extent().max(DVec3::splat(f64::MIN_POSITIVE));
+    let q = ((p - bounds.min) * scale).clamp(DVec3::ZERO, DVec3::splat(1023.0));
+    let spread = |v: u32| {
+        // 10 bits to every third bit of 30.
+        let mut x = v & 0x3ff;
+        x = (x | (x << 16)) & 0x0300_00ff;
+        x = (x | (x << 8)) & 0x0300_f00f;
+        x = (x | (x << 4)) & 0x030c_30c3;
+        (x | (x << 2)) & 0x0924_9249
+    };
+    spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2)
 }
 
 /// The generalized winding number of a point with respect to triangles: the sum of
@@ -362,6 +378,8 @@ pub struct BuildStats {
     pub components: usize,
     /// Point-in-solid (winding number) queries made.
     pub inside_queries: usize,
+    /// Milliseconds spent gathering the world-space triangles (by [`Octree::from_scene`]).
+    pub triangles_ms: f64,
     /// Milliseconds spent subdividing.
     pub subdivide_ms: f64,
     /// Milliseconds spent classifying cells with no surface.
@@ -571,6 +589,7 @@ impl Octree {
             nodes,
             build_stats: BuildStats {
                 triangles: soup.len(),
+                triangles_ms: 0.0,
                 raw_nodes: b.nodes.len(),
                 sat_tests: b.sat_tests,
                 components,
@@ -586,11 +605,15 @@ impl Octree {
     /// triangle gives a single Empty leaf over the unit cube.
     pub fn from_scene(scene: &Scene, depth: u32) -> Result<Octree> {
         check_depth(depth)?;
+        let start = Instant::now();
         let soup = TriangleSoup::from_scene(scene);
-        match Region::enclosing(&soup.bounds()) {
-            Some(region) => Octree::build(&soup, region, depth),
-            None => Octree::uniform(Region::new(DVec3::ZERO, 1.0)?, depth, Leaf::Empty),
-        }
+        let triangles_ms = start.elapsed().as_secs_f64() * 1e3;
+        let mut tree = match Region::enclosing(&soup.bounds()) {
+            Some(region) => Octree::build(&soup, region, depth)?,
+            None => Octree::uniform(Region::new(DVec3::ZERO, 1.0)?, depth, Leaf::Empty)?,
+        };
+        tree.build_stats.triangles_ms = triangles_ms;
+        Ok(tree)
     }
 }
 
