@@ -209,7 +209,7 @@ impl TriangleSoup {
         self.objects.iter().any(|o| {
             o.closed
                 && o.bounds.contains(p)
-                && winding_number(p, &self.triangles[o.start..o.end]).abs() > 0.5
+                && object_winding_number(p, &self.triangles[o.start..o.end]).abs() > 0.5
         })
     }
 
@@ -257,6 +257,20 @@ pub fn winding_number(p: DVec3, triangles: &[[DVec3; 3]]) -> f64 {
         sum += 2.0 * det.atan2(den);
     }
     sum / (4.0 * std::f64::consts::PI)
+}
+
+/// [`winding_number`], summed in chunks on several threads for large objects (the sum
+/// is an integer plus rounding, so the order of addition does not matter).
+fn object_winding_number(p: DVec3, triangles: &[[DVec3; 3]]) -> f64 {
+    #[cfg(feature = "parallel")]
+    if triangles.len() >= 1 << 16 {
+        use rayon::prelude::*;
+        return triangles
+            .par_chunks(1 << 14)
+            .map(|c| winding_number(p, c))
+            .sum();
+    }
+    winding_number(p, triangles)
 }
 
 /// The point of triangle `t` nearest to `p` (by the Voronoi regions of its vertices,
@@ -409,10 +423,14 @@ const REACHED_CHILDREN: [u8; 64] = {
     table
 };
 
+/// Below this many triangles the build stays on one thread.
+#[cfg(feature = "parallel")]
+const PARALLEL_MIN_TRIANGLES: usize = 4096;
+
 struct Builder<'a> {
     soup: &'a TriangleSoup,
-    tmin: Vec<DVec3>,
-    tmax: Vec<DVec3>,
+    tmin: &'a [DVec3],
+    tmax: &'a [DVec3],
     region: Region,
     depth: u32,
     nodes: Vec<Node>,
@@ -451,8 +469,16 @@ impl Builder<'_> {
             self.nodes
                 .push(Node::new(i as u32, (cell.level + 1) as u8, k));
         }
-        // Each triangle goes to the children its box reaches (one comparison with the
-        // mid-plane per axis), then the exact test decides.
+        let lists = self.split(cell, list);
+        for (k, sub) in lists.into_iter().enumerate() {
+            self.subdivide(first + k, cell.child(k as u8), &sub);
+        }
+    }
+
+    /// The lists of triangles meeting each child of `cell`: each triangle goes to the
+    /// children its box reaches (one comparison with the mid-plane per axis), then the
+    /// exact test decides.
+    fn split(&mut self, cell: Cell, list: &[u32]) -> [Vec<u32>; 8] {
         let boxes: [Aabb; 8] = std::array::from_fn(|k| self.region.cell_box(cell.child(k as u8)));
         let mid = boxes[0].max;
         let mut lists: [Vec<u32>; 8] = Default::default();
@@ -469,9 +495,78 @@ impl Builder<'_> {
                 }
             }
         }
-        for (k, sub) in lists.into_iter().enumerate() {
-            self.subdivide(first + k, cell.child(k as u8), &sub);
+        lists
+    }
+
+    /// Subdivides from the root; with the `parallel` feature the root's 8 octants are
+    /// built on separate threads and spliced in order, which gives the very array the
+    /// one-thread recursion gives.
+    fn subdivide_root(&mut self, list: &[u32]) {
+        #[cfg(feature = "parallel")]
+        if self.depth > 1
+            && list.len() >= PARALLEL_MIN_TRIANGLES
+            && rayon::current_num_threads() > 1
+        {
+            use rayon::prelude::*;
+            self.nodes[0].kind = NodeKind::Internal;
+            self.nodes[0].first_child = 1;
+            for k in 0..8u8 {
+                self.nodes.push(Node::new(0, 1, k));
+            }
+            let lists = self.split(Cell::ROOT, list);
+            let (soup, tmin, tmax, region, depth) =
+                (self.soup, self.tmin, self.tmax, self.region, self.depth);
+            let parts: Vec<Builder<'_>> = lists
+                .par_iter()
+                .enumerate()
+                .map(|(k, sub)| {
+                    let mut part = Builder {
+                        soup,
+                        tmin,
+                        tmax,
+                        region,
+                        depth,
+                        nodes: vec![Node::new(0, 1, k as u8)],
+                        unknown: Vec::new(),
+                        sat_tests: 0,
+                    };
+                    part.subdivide(0, Cell::ROOT.child(k as u8), sub);
+                    part
+                })
+                .collect();
+            for (k, part) in parts.into_iter().enumerate() {
+                self.splice(1 + k, &part);
+            }
+            return;
         }
+        self.subdivide(0, Cell::ROOT, list);
+    }
+
+    /// Appends a subtree built on its own (its node 0 standing for node `at`).
+    #[cfg(feature = "parallel")]
+    fn splice(&mut self, at: usize, part: &Builder<'_>) {
+        let base = self.nodes.len() as u32;
+        let map = |i: u32| if i == 0 { at as u32 } else { base + i - 1 };
+        let root = part.nodes[0];
+        let n = &mut self.nodes[at];
+        n.kind = root.kind;
+        n.face = root.face;
+        n.first_child = if root.first_child == NONE {
+            NONE
+        } else {
+            map(root.first_child)
+        };
+        for &node in &part.nodes[1..] {
+            let mut node = node;
+            node.parent = map(node.parent);
+            if node.first_child != NONE {
+                node.first_child = map(node.first_child);
+            }
+            self.nodes.push(node);
+        }
+        self.unknown
+            .extend(part.unknown.iter().map(|&(i, c)| (map(i), c)));
+        self.sat_tests += part.sat_tests;
     }
 
     /// The face of the triangle nearest to the cell's centre (lower face id, then lower
@@ -552,18 +647,20 @@ impl Octree {
     pub fn build(soup: &TriangleSoup, region: Region, depth: u32) -> Result<Octree> {
         check_depth(depth)?;
         let start = Instant::now();
+        let tmin: Vec<DVec3> = soup
+            .triangles
+            .iter()
+            .map(|t| t[0].min(t[1]).min(t[2]))
+            .collect();
+        let tmax: Vec<DVec3> = soup
+            .triangles
+            .iter()
+            .map(|t| t[0].max(t[1]).max(t[2]))
+            .collect();
         let mut b = Builder {
             soup,
-            tmin: soup
-                .triangles
-                .iter()
-                .map(|t| t[0].min(t[1]).min(t[2]))
-                .collect(),
-            tmax: soup
-                .triangles
-                .iter()
-                .map(|t| t[0].max(t[1]).max(t[2]))
-                .collect(),
+            tmin: &tmin,
+            tmax: &tmax,
             region,
             depth,
             nodes: vec![Node::new(NONE, 0, 0)],
@@ -574,7 +671,7 @@ impl Octree {
         let list: Vec<u32> = (0..soup.len() as u32)
             .filter(|&t| b.overlaps(t, &root_box))
             .collect();
-        b.subdivide(0, Cell::ROOT, &list);
+        b.subdivide_root(&list);
         drop(list);
         let subdivide_ms = start.elapsed().as_secs_f64() * 1e3;
         let start = Instant::now();
@@ -766,6 +863,27 @@ mod tests {
         assert_eq!(t.voxel(0, 0, 0), Some(Leaf::Empty));
         assert_eq!(t.build_stats().components, 2);
         assert_eq!(t.build_stats().inside_queries, 1);
+    }
+
+    #[cfg(feature = "parallel")]
+    #[test]
+    fn parallel_build_equals_one_thread() {
+        let scene = demo::sphere(96, 48); // above the parallel threshold
+        let soup = TriangleSoup::from_scene(&scene);
+        let region = Region::enclosing(&soup.bounds()).unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let a = one.install(|| Octree::build(&soup, region, 6).unwrap());
+        let b = two.install(|| Octree::build(&soup, region, 6).unwrap());
+        assert_eq!(a.nodes(), b.nodes());
+        assert_eq!(a.build_stats().sat_tests, b.build_stats().sat_tests);
+        assert_eq!(a.build_stats().components, b.build_stats().components);
     }
 
     #[test]
