@@ -31,13 +31,15 @@
 //!   view-independent choice.
 //! - Complexity: O(Σ over levels of the triangle-cell incidences) for the subdivision
 //!   (a triangle much smaller than the cells meets one cell per level), O(n depth) for
-//!   the flood fill over n cells, O(T) per winding-number query (one or two per solid
-//!   in practice).
+//!   the flood fill over n cells, O(T) per winding-number query (one per solid, plus
+//!   one per pocket of inside cells cut off by a part thinner than two voxels).
 //! - Limitations: the overlap test is exact in real arithmetic and evaluated in `f64`,
 //!   so a triangle touching a cell within rounding may go either way (the same way for
 //!   every caller, since cell boxes come from [`Region::cell_box`]). A face lying exactly
 //!   on a cell plane marks the cells on both sides. A closed object thinner than a voxel
-//!   has no Full cells.
+//!   has no Full cells. A mesh flagged closed that has small holes still gets a sensible
+//!   inside (the generalized winding number degrades gracefully), decided once per
+//!   component.
 
 use std::time::Instant;
 
