@@ -20,9 +20,14 @@
 //!   a ray from outside every solid always meets the boundary first, and an eye inside
 //!   a solid sees its boundary voxels from inside.
 //! - Approximation: the image is the scene's voxelization, not its polygons
-//!   ([`crate::surface::Algorithm::is_exact`] is false). Silhouettes grow by up to a voxel
-//!   (a voxel is Partial as soon as a face touches it), depths are early by up to a
-//!   voxel's diagonal along the ray, and ids near an edge may name the neighbouring face.
+//!   ([`crate::surface::Algorithm::is_exact`] is false). Every pixel the z-buffer covers
+//!   is covered (the ray meets its face inside a Partial voxel), and the silhouette grows
+//!   by up to the projection of a voxel diagonal (a voxel is Partial as soon as a face
+//!   touches it). Depths are early: a voxel meeting a face lies within a voxel diagonal
+//!   `√3 v` of the face's plane, so the ray enters it at most `√3 v / |d·n|` before
+//!   meeting the face (ray direction `d` scaled to unit depth, face normal `n`), which
+//!   grows at grazing incidence. Ids near an edge may name the neighbouring face. The
+//!   tests check these bounds against the z-buffer.
 //! - Back faces: the octree does not know the viewpoint and its voxels are solid, so
 //!   there is no back-face test; visibility comes from the order alone. The source face
 //!   of a voxel may be a face that is back-facing in this view (on edges, and in objects
