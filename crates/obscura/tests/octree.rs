@@ -771,6 +771,12 @@ fn first_hit_is_the_nearest_partial_voxel() {
     assert!(hits > 100 && misses > 20, "{hits} hits, {misses} misses");
     assert_eq!(tree.first_hit(DVec3::NAN, DVec3::X, 0.0, 1.0).0, None);
     assert_eq!(tree.first_hit(DVec3::ZERO, DVec3::ZERO, 0.0, 1.0).0, None);
+    // A ray aimed at a Partial voxel's centre hits, but not in an empty interval.
+    let o = region.min() - DVec3::ONE;
+    let d = partial[0].1.center() - o;
+    assert!(tree.first_hit(o, d, 0.0, f64::INFINITY).0.is_some());
+    assert_eq!(tree.first_hit(o, d, 2.0, 1.0).0, None);
+    assert_eq!(tree.first_hit(o, d, f64::NAN, 1.0).0, None);
 }
 
 // ---------------------------------------------------------------------------------

@@ -64,8 +64,8 @@ struct Walk {
 
 impl Octree {
     /// The first Partial voxel that the ray `origin + t direction` meets for `t` in
-    /// `[t_min, t_max]`, and the number of nodes entered on the way. Non-finite input
-    /// meets nothing.
+    /// `[t_min, t_max]`, and the number of nodes entered on the way. Non-finite input,
+    /// a zero direction and an empty interval meet nothing.
     #[must_use]
     pub fn first_hit(
         &self,
@@ -74,7 +74,10 @@ impl Octree {
         t_min: f64,
         t_max: f64,
     ) -> (Option<RayHit>, u32) {
-        if !(origin.is_finite() && direction.is_finite()) || direction == DVec3::ZERO {
+        if !(origin.is_finite() && direction.is_finite())
+            || direction == DVec3::ZERO
+            || !(t_min <= t_max)
+        {
             return (None, 0);
         }
         let mask = negative_mask(direction);
