@@ -40,6 +40,9 @@ pub struct RenderArgs {
     /// Bounding volume for raycast-bounds: sphere, aabb, obb, kdop.
     #[arg(long, default_value = "aabb", value_parser = parse_bounds)]
     pub bounds: BoundsKind,
+    /// Octree depth for --algo octree: voxels are 2^DEPTH on a side (at most 10).
+    #[arg(long, value_name = "DEPTH", default_value_t = 7)]
+    pub octree_depth: u32,
     /// The PNG to write.
     #[arg(
         short = 'o',
@@ -78,7 +81,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = &loaded.scene;
     let viewport = args.view.viewport(scene)?;
     let camera = args.view.camera(scene, viewport)?;
-    let options = RenderOptions::default().with_bounds(args.bounds);
+    let options = RenderOptions::default()
+        .with_bounds(args.bounds)
+        .with_octree_depth(args.octree_depth);
     let prep = args.view.prepare_options();
     let threads = args.view.threads.unwrap_or(0);
 
