@@ -14,6 +14,6 @@ mod setup;
 #[cfg(target_arch = "x86_64")]
 pub mod simd;
 
-pub use coverage::{EdgeFunction, FillRule, PixelRect, PolygonCoverage};
+pub use coverage::{EdgeFunction, FillRule, PixelRect, PolygonCoverage, sample_rect};
 pub use depth_plane::DepthPlane;
 pub use setup::{NARROW_EDGES, NARROW_WIDTH, NarrowEdges, PolygonSetup, TriangleSetup, row_span};
