@@ -28,6 +28,9 @@
 //!
 //! - Complexity: O(n) per span of n pixels; O(1) work per run, at most a few runs per
 //!   span (one per power of two the key crosses).
+//! - Limitations: keys that are negative, zero, subnormal or huge, and steps of exactly
+//!   half a unit, have no linear run: they are stepped serially (same result, slower).
+//!   Depth keys of a prepared view are positive and normal but for degenerate cameras.
 //! - Source: seed 000 "Αλγόριθμος Z-buffer", seed 004 "Алгоритм z-буфера" (the
 //!   incremental depth); Goldberg, *What every computer scientist should know about
 //!   floating-point arithmetic* (1991) for the rounding facts.
@@ -37,7 +40,7 @@ use std::ops::Range;
 use super::kernel::RasterKernel;
 
 /// Spans of at most this many pixels go to
-/// [`RasterKernel::depth_test_short`](super::kernel::RasterKernel::depth_test_short):
+/// [`RasterKernel::depth_test_short`]:
 /// their keys stepped serially, tested together.
 pub const SHORT_SPAN: usize = 8;
 

@@ -14,6 +14,14 @@
 //!
 //! Compiled inside a function that enables AVX-512, the same intrinsics become
 //! AVX-512 instructions where the compiler finds them better (masked stores).
+//!
+//! - Input and output: those of [`RasterKernel`], bit for bit (tests compare every
+//!   kernel with [`Portable`](super::kernel::Portable) on random polygons and spans).
+//! - Limitations: x86-64 only; AVX-512 intrinsics would need Rust 1.89 (the crate's
+//!   minimum is 1.88), so 512-bit registers are used only where the compiler chooses.
+//! - Safety: every `unsafe` block is a target-feature call justified by the
+//!   [`Avx2`] value (it exists only after run-time detection) or an unaligned load or
+//!   store whose bounds the block's comment states.
 
 use std::arch::x86_64::*;
 
