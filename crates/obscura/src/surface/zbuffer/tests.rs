@@ -181,6 +181,35 @@ fn long_spans_cross_powers_of_two_of_the_key() {
 }
 
 #[test]
+fn tiny_images_match_the_reference() {
+    // Rows shorter than a vector: every kernel must stay inside its row.
+    let scene = random_triangles(300, 21, 1.0, 0.4);
+    let cam = orbit_cameras(&scene, 1, 5)[0];
+    let mut covered = 0;
+    for (w, h) in [(1, 1), (3, 5), (7, 2), (9, 1), (4, 4), (13, 3)] {
+        let vp = Viewport::new(w, h).unwrap();
+        let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+        let opts = RenderOptions::default();
+        let reference = render_reference(&view, &opts).unwrap();
+        covered += reference.0.covered_pixels();
+        for kernel in kernels() {
+            for schedule in [Schedule::Whole, Schedule::Bands] {
+                let fast = render_scheduled(&view, &opts, kernel, 1, schedule).unwrap();
+                assert_same(
+                    &fast,
+                    &reference,
+                    &format!("{w}x{h} {kernel:?} {schedule:?}"),
+                );
+            }
+        }
+    }
+    assert!(
+        covered > 20,
+        "the triangles must reach the tiny images: {covered}"
+    );
+}
+
+#[test]
 fn empty_view_gives_background() {
     let s = Scene::new();
     let cam = Camera::perspective(DVec3::Z, DVec3::ZERO, DVec3::Y, 60.0, 0.1, 10.0);
