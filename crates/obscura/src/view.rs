@@ -528,20 +528,20 @@ pub fn prepare<'s>(
     let out = passes::process_faces(&ctx, face_total, threads);
     vertices.extend_from_slice(&out.clipped_vertices);
     stats.push(
-        "faces: back-face culling (fused pass: time of the three face stages)",
+        "faces: back-face culling (fused; time of all 3)",
         "faces",
         face_total as u64,
         out.front,
         start,
     );
     stats.push_untimed(
-        "faces: frustum (outcodes) (timed in the back-face stage)",
+        "faces: frustum (outcodes) (timed in fused pass)",
         "faces",
         out.front,
         out.kept,
     );
     stats.push_untimed(
-        "faces: clip (Sutherland-Hodgman, homogeneous) (timed in the back-face stage)",
+        "faces: clip (Sutherland-Hodgman) (timed above)",
         "faces",
         out.to_clip,
         out.clipped,
