@@ -372,7 +372,7 @@ pub fn render_bvh(
         setup.cast_row(row, counters, |ctx, counters| {
             let mut c = TraceCounters::default();
             let hit = bvh.closest_hit(ctx, setup.rays.far, &mut stack, &mut c);
-            counters.bound_tests += c.boxes;
+            counters.bound_tests += c.nodes;
             counters.triangle_tests += c.triangles;
             hit
         })
@@ -380,12 +380,14 @@ pub fn render_bvh(
     let mut stats = setup.stats(&counters, ms_since(start));
     let b = bvh.stats();
     stats.set("build_ms", b.build_ms);
+    stats.set("binary_nodes", b.binary_nodes as f64);
+    stats.set("binary_depth", b.binary_depth as f64);
     stats.set("nodes", b.nodes as f64);
     stats.set("leaves", b.leaves as f64);
     stats.set("depth", b.depth as f64);
     stats.set("sah_cost", b.sah_cost);
     stats.set(
-        "box_tests_per_ray",
+        "node_visits_per_ray",
         per(counters.bound_tests, counters.rays),
     );
     stats.set(

@@ -6,14 +6,54 @@
 //! cost `A_L N_L + A_R N_R` (half areas, counts); the cheapest plane over the three
 //! axes wins if it beats making a leaf (`N` tests) after paying
 //! [`BvhOptions::traversal_cost`] for the node. Children's boxes are the unions of
-//! their bins' boxes, so no extra pass over the triangles is needed.
+//! their bins' boxes and their centroid boxes are gathered while partitioning, so no
+//! extra pass over the triangles is needed. Ranges smaller than the bin count use
+//! `max(N, 4)` bins.
 //!
 //! Fallbacks: all centroids equal (the SAH cannot separate them) or deeper than
 //! [`MEDIAN_DEPTH`]: split at the median by index order along the longest axis, which
 //! halves the range and bounds the depth.
 
-use super::{Bvh, BvhNode, BvhOptions, NodePair, f32_down, f32_up};
+use super::{BvhOptions, f32_down, f32_up};
 use crate::accel::triangles::SceneTriangles;
+
+/// A node of the binary tree: its box and either two children (`count == 0`, at
+/// `first` and `first + 1`) or `count` triangles from `first` (in build order).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct BinaryNode {
+    pub min: [f32; 3],
+    pub first: u32,
+    pub max: [f32; 3],
+    pub count: u32,
+}
+
+impl BinaryNode {
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    pub fn half_area(&self) -> f64 {
+        Box3 {
+            min: self.min,
+            max: self.max,
+        }
+        .half_area()
+    }
+}
+
+/// The binary SAH tree: nodes (root at 0) and the triangles' order in its leaves.
+#[derive(Clone, Debug, Default)]
+pub(super) struct BinaryTree {
+    pub nodes: Vec<BinaryNode>,
+    pub order: Vec<u32>,
+    pub leaves: usize,
+    pub depth: usize,
+    pub sah_cost: f64,
+    pub scale: f64,
+}
+
+/// The most bins per axis.
+pub(crate) const MAX_BINS: usize = 64;
 
 /// Below this depth splits are SAH; at and beyond it, median splits.
 pub(crate) const MEDIAN_DEPTH: usize = 56;
@@ -31,19 +71,29 @@ impl Box3 {
         max: [f32::NEG_INFINITY; 3],
     };
 
+    // Plain comparisons instead of `f32::min`: the inputs are never NaN, and this
+    // compiles to single min/max instructions in the binning loop.
     #[inline(always)]
     fn grow(&mut self, o: &Box3) {
         for k in 0..3 {
-            self.min[k] = self.min[k].min(o.min[k]);
-            self.max[k] = self.max[k].max(o.max[k]);
+            self.min[k] = if o.min[k] < self.min[k] {
+                o.min[k]
+            } else {
+                self.min[k]
+            };
+            self.max[k] = if o.max[k] > self.max[k] {
+                o.max[k]
+            } else {
+                self.max[k]
+            };
         }
     }
 
     #[inline(always)]
     fn grow_point(&mut self, p: &[f32; 3]) {
         for (k, &x) in p.iter().enumerate() {
-            self.min[k] = self.min[k].min(x);
-            self.max[k] = self.max[k].max(x);
+            self.min[k] = if x < self.min[k] { x } else { self.min[k] };
+            self.max[k] = if x > self.max[k] { x } else { self.max[k] };
         }
     }
 
@@ -58,17 +108,26 @@ impl Box3 {
     }
 }
 
+/// A triangle during the build: its box, centroid and index. The primitives are moved
+/// while partitioning (not an index array into them), so every pass reads memory
+/// sequentially; with a million triangles, random access would cost a cache miss per
+/// triangle per level.
+#[derive(Clone, Copy, Debug)]
+struct Prim {
+    bounds: Box3,
+    centroid: [f32; 3],
+    index: u32,
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Bin {
     count: u32,
     bounds: Box3,
-    centroids: Box3,
 }
 
 const EMPTY_BIN: Bin = Bin {
     count: 0,
     bounds: Box3::EMPTY,
-    centroids: Box3::EMPTY,
 };
 
 /// A range waiting to be turned into a node.
@@ -81,17 +140,16 @@ struct Task {
     centroids: Box3,
 }
 
-pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> Bvh {
+pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> BinaryTree {
     let n = triangles.len();
-    let mut bvh = Bvh::default();
-    if n == 0 || n > u32::MAX as usize / 2 {
-        return bvh;
+    let mut tree = BinaryTree::default();
+    if n == 0 || n > (u32::MAX >> 3) as usize {
+        return tree;
     }
-    let bins = options.bins.clamp(2, 256);
-    let max_leaf = options.max_leaf_size.max(1);
+    let bins = options.bins.clamp(2, MAX_BINS);
+    let max_leaf = options.max_leaf_size.clamp(1, super::MAX_LEAF_SIZE);
     let verts = triangles.vertices();
-    let mut boxes: Vec<Box3> = Vec::with_capacity(n);
-    let mut centroids: Vec<[f32; 3]> = Vec::with_capacity(n);
+    let mut prims: Vec<Prim> = Vec::with_capacity(n);
     let (mut root_bounds, mut root_centroids) = (Box3::EMPTY, Box3::EMPTY);
     let mut scale = 0.0f64;
     for t in verts {
@@ -107,11 +165,13 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> Bvh {
         let c: [f32; 3] = std::array::from_fn(|k| (b.min[k] + b.max[k]) * 0.5);
         root_bounds.grow(&b);
         root_centroids.grow_point(&c);
-        boxes.push(b);
-        centroids.push(c);
+        prims.push(Prim {
+            bounds: b,
+            centroid: c,
+            index: prims.len() as u32,
+        });
     }
-    let mut index: Vec<u32> = (0..n as u32).collect();
-    let mut nodes: Vec<BvhNode> = vec![BvhNode::default(); 2];
+    let mut nodes: Vec<BinaryNode> = vec![BinaryNode::default()];
     let mut stack = vec![Task {
         node: 0,
         start: 0,
@@ -127,16 +187,14 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> Bvh {
         let count = task.end - task.start;
         max_depth = max_depth.max(task.depth);
         let area = task.bounds.half_area();
-        let split: Option<(usize, Option<Plan>)> = if count <= 1 {
+        let split: Option<(usize, Option<(Box3, Box3, Box3, Box3)>)> = if count <= 1 {
             None
         } else if task.depth >= MEDIAN_DEPTH {
-            let range = &mut index[task.start..task.end];
-            Some((median_split(range, &centroids, &task.centroids), None))
+            let range = &mut prims[task.start..task.end];
+            Some((median_split(range, &task.centroids), None))
         } else {
             match sah_split(
-                &index[task.start..task.end],
-                &boxes,
-                &centroids,
+                &prims[task.start..task.end],
                 &task.centroids,
                 &mut bin_store,
             ) {
@@ -147,15 +205,15 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> Bvh {
                     if count <= max_leaf && (split_cost >= leaf_cost || area == 0.0) {
                         None
                     } else {
-                        let range = &mut index[task.start..task.end];
-                        let mid = partition(range, &centroids, &task.centroids, &plan, bins);
-                        Some((mid, Some(plan)))
+                        let range = &mut prims[task.start..task.end];
+                        let (mid, lc, rc) = partition(range, &task.centroids, &plan, bins);
+                        Some((mid, Some((plan.left, lc, plan.right, rc))))
                     }
                 }
                 None if count <= max_leaf => None,
                 None => {
-                    let range = &mut index[task.start..task.end];
-                    Some((median_split(range, &centroids, &task.centroids), None))
+                    let range = &mut prims[task.start..task.end];
+                    Some((median_split(range, &task.centroids), None))
                 }
             }
         };
@@ -173,15 +231,15 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> Bvh {
         node.first = left;
         node.count = 0;
         sah += area / root_area * options.traversal_cost;
-        nodes.push(BvhNode::default());
-        nodes.push(BvhNode::default());
+        nodes.push(BinaryNode::default());
+        nodes.push(BinaryNode::default());
         let (mid, plan) = split_at;
         let mid = task.start + mid;
         let ((lb, lc), (rb, rc)) = match plan {
-            Some(p) => (p.left, p.right),
+            Some((lb, lc, rb, rc)) => ((lb, lc), (rb, rc)),
             None => (
-                range_bounds(&index[task.start..mid], &boxes, &centroids),
-                range_bounds(&index[mid..task.end], &boxes, &centroids),
+                range_bounds(&prims[task.start..mid]),
+                range_bounds(&prims[mid..task.end]),
             ),
         };
         // Push the right first so the left subtree is laid out next (depth first).
@@ -202,20 +260,13 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> Bvh {
             centroids: lc,
         });
     }
-    bvh.pairs = nodes
-        .chunks(2)
-        .map(|c| NodePair([c[0], c.get(1).copied().unwrap_or_default()]))
-        .collect();
-    bvh.triangles = index.iter().map(|&i| verts[i as usize]).collect();
-    let polys = triangles.triangle_polygons();
-    bvh.polygons = index.iter().map(|&i| polys[i as usize]).collect();
-    bvh.order = index;
-    bvh.scale = scale;
-    bvh.stats.nodes = nodes.len() - 1;
-    bvh.stats.leaves = leaves;
-    bvh.stats.depth = max_depth;
-    bvh.stats.sah_cost = sah;
-    bvh
+    tree.order = prims.iter().map(|p| p.index).collect();
+    tree.nodes = nodes;
+    tree.scale = scale;
+    tree.leaves = leaves;
+    tree.depth = max_depth;
+    tree.sah_cost = sah;
+    tree
 }
 
 #[inline(always)]
@@ -231,19 +282,15 @@ struct Plan {
     plane: usize,
     /// `A_L N_L + A_R N_R`.
     cost: f64,
-    left: (Box3, Box3),
-    right: (Box3, Box3),
+    left: Box3,
+    right: Box3,
 }
 
 /// The best SAH plane, `None` when the centroids coincide on every axis.
-fn sah_split(
-    index: &[u32],
-    boxes: &[Box3],
-    centroids: &[[f32; 3]],
-    cbox: &Box3,
-    bins: &mut [[Bin; 3]],
-) -> Option<Plan> {
-    let nb = bins.len();
+fn sah_split(prims: &[Prim], cbox: &Box3, bins: &mut [[Bin; 3]]) -> Option<Plan> {
+    // Small ranges need few bins: the sweep and the reset cost O(bins) per node.
+    let nb = bins.len().min(prims.len().max(4));
+    let bins = &mut bins[..nb];
     let mut scale = [0.0f32; 3];
     let mut usable = [false; 3];
     for k in 0..3 {
@@ -255,18 +302,16 @@ fn sah_split(
         return None;
     }
     bins.fill([EMPTY_BIN; 3]);
-    for &i in index {
-        let c = &centroids[i as usize];
-        let b = &boxes[i as usize];
+    for p in prims {
+        let (c, b) = (&p.centroid, &p.bounds);
         for k in 0..3 {
             let bin = &mut bins[bin_of(c[k], cbox.min[k], scale[k], nb)][k];
             bin.count += 1;
             bin.bounds.grow(b);
-            bin.centroids.grow_point(c);
         }
     }
     let mut best: Option<(usize, usize, f64)> = None;
-    let mut right_cost = vec![0.0f64; nb];
+    let mut right_cost = [0.0f64; MAX_BINS];
     for k in 0..3 {
         if !usable[k] {
             continue;
@@ -282,7 +327,7 @@ fn sah_split(
         for s in 1..nb {
             acc.grow(&bins[s - 1][k].bounds);
             cnt += bins[s - 1][k].count;
-            if cnt == 0 || cnt as usize == index.len() {
+            if cnt == 0 || cnt as usize == prims.len() {
                 continue;
             }
             let cost = acc.half_area() * f64::from(cnt) + right_cost[s];
@@ -293,12 +338,11 @@ fn sah_split(
     }
     let (axis, plane, cost) = best?;
     let side = |range: std::ops::Range<usize>| {
-        let (mut b, mut c) = (Box3::EMPTY, Box3::EMPTY);
+        let mut b = Box3::EMPTY;
         for bin in &bins[range] {
             b.grow(&bin[axis].bounds);
-            c.grow(&bin[axis].centroids);
         }
-        (b, c)
+        b
     };
     Some(Plan {
         axis,
@@ -309,33 +353,32 @@ fn sah_split(
     })
 }
 
-/// Moves the triangles whose centroid bin is below `plane` to the front; returns how
-/// many there are.
-fn partition(
-    index: &mut [u32],
-    centroids: &[[f32; 3]],
-    cbox: &Box3,
-    plan: &Plan,
-    bins: usize,
-) -> usize {
+/// Moves the triangles whose centroid bin is below the plan's plane to the front;
+/// returns how many there are and the centroid boxes of both sides.
+fn partition(prims: &mut [Prim], cbox: &Box3, plan: &Plan, bins: usize) -> (usize, Box3, Box3) {
     let (axis, plane) = (plan.axis, plan.plane);
+    // The same bin count and scale as the sweep (see `sah_split`).
+    let nb = bins.min(prims.len().max(4));
     let extent = cbox.max[axis] - cbox.min[axis];
-    let scale = bins as f32 / extent;
-    let (mut i, mut j) = (0, index.len());
+    let scale = nb as f32 / extent;
+    let (mut left, mut right) = (Box3::EMPTY, Box3::EMPTY);
+    let (mut i, mut j) = (0, prims.len());
     while i < j {
-        let c = centroids[index[i] as usize][axis];
-        if bin_of(c, cbox.min[axis], scale, bins) < plane {
+        let c = prims[i].centroid;
+        if bin_of(c[axis], cbox.min[axis], scale, nb) < plane {
+            left.grow_point(&c);
             i += 1;
         } else {
+            right.grow_point(&c);
             j -= 1;
-            index.swap(i, j);
+            prims.swap(i, j);
         }
     }
-    i
+    (i, left, right)
 }
 
 /// Splits at the median centroid along the longest axis of the centroid box.
-fn median_split(index: &mut [u32], centroids: &[[f32; 3]], cbox: &Box3) -> usize {
+fn median_split(prims: &mut [Prim], cbox: &Box3) -> usize {
     let e: [f32; 3] = std::array::from_fn(|k| cbox.max[k] - cbox.min[k]);
     let axis = if e[0] >= e[1] && e[0] >= e[2] {
         0
@@ -344,18 +387,16 @@ fn median_split(index: &mut [u32], centroids: &[[f32; 3]], cbox: &Box3) -> usize
     } else {
         2
     };
-    let mid = index.len() / 2;
-    index.select_nth_unstable_by(mid, |&a, &b| {
-        centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
-    });
+    let mid = prims.len() / 2;
+    prims.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
     mid
 }
 
-fn range_bounds(index: &[u32], boxes: &[Box3], centroids: &[[f32; 3]]) -> (Box3, Box3) {
+fn range_bounds(prims: &[Prim]) -> (Box3, Box3) {
     let (mut b, mut c) = (Box3::EMPTY, Box3::EMPTY);
-    for &i in index {
-        b.grow(&boxes[i as usize]);
-        c.grow_point(&centroids[i as usize]);
+    for p in prims {
+        b.grow(&p.bounds);
+        c.grow_point(&p.centroid);
     }
     (b, c)
 }

@@ -3,25 +3,32 @@
 //! Source: seed 000, "Περιβάλλοντες Όγκοι (5)-(7)" (hierarchies of bounding volumes and
 //! the hierarchical `IntersectionTest`), seed 002 "Gerarchie di Bounding Volume" (a
 //! child need not be tested if the ray misses its parent). Build: Wald, "On fast
-//! Construction of SAH-based Bounding Volume Hierarchies" (2007), binned SAH.
-//! Traversal: ordered, with the robust box test of Ize, "Robust BVH Ray Traversal"
-//! (JCGT 2013) adapted to single precision by a margin (see [`traverse`]).
+//! Construction of SAH-based Bounding Volume Hierarchies" (2007), binned SAH; the
+//! binary tree is then collapsed into a 4-wide one (Dammertz et al., "Shallow Bounding
+//! Volume Hierarchies for Fast SIMD Ray Tracing of Incoherent Rays", 2008). Traversal:
+//! ordered, with a conservative single-precision box test (see [`traverse`]).
 //!
 //! - Input: [`SceneTriangles`]. Output: a [`Bvh`], built once and reusable for any
 //!   number of views (it holds its own copy of the triangles in leaf order).
 //! - Build ([`build`]): binned surface area heuristic with [`BvhOptions::bins`] bins
 //!   (16 by default) per axis, O(T log T) for T triangles; deep or unsplittable
-//!   ranges fall back to median splits, so depth stays below [`MAX_DEPTH`].
-//! - Layout: nodes of 32 bytes (single-precision box, two `u32`), siblings stored side
-//!   by side in 64-byte pairs so one cache line holds both boxes a step tests.
-//! - Traversal ([`traverse`]): nearest child first, the other pushed with its entry
-//!   distance and skipped when popped if a nearer hit was found since; triangles by
-//!   the watertight `f64` test of [`crate::accel::triangles`], so the BVH finds
-//!   exactly the hits brute force finds. [`Bvh::closest_hit_recursive`] is the seeds'
-//!   `IntersectionTest` verbatim (unordered recursion), kept for comparison.
-//! - Limitations: binary tree, scalar box tests (no 4/8-wide nodes or packets); the
-//!   boxes are single precision (rounded outwards), so scenes spanning more than
-//!   about 10^30 units are not supported.
+//!   ranges fall back to median splits, so the depth stays below [`MAX_DEPTH`].
+//! - Collapse: each wide node takes the binary node's two children and repeatedly
+//!   opens the interior child of largest surface area until it has four (the SAH's
+//!   most likely visited), which halves the depth.
+//! - Layout: [`BvhNode`] holds its four children's boxes as structure-of-arrays
+//!   (`min[axis][child]`), 128 bytes (two cache lines); leaves are stored in the slots
+//!   of their parent (triangle range), so a ray tests four boxes per step with one
+//!   4-lane computation and never visits a leaf node.
+//! - Traversal ([`traverse`]): the children a ray enters are visited nearest first, the
+//!   others pushed with their entry distance and skipped when popped if a nearer hit
+//!   was found since; triangles by the watertight `f64` test of
+//!   [`crate::accel::triangles`], so the BVH finds exactly the hits brute force finds.
+//!   [`Bvh::closest_hit_recursive`] is the seeds' `IntersectionTest` verbatim
+//!   (unordered recursion), kept for comparison.
+//! - Limitations: no ray packets; boxes are single precision (rounded outwards), so
+//!   scenes with coordinates beyond about 10^30 are not supported; at most 2^29
+//!   triangles.
 
 mod build;
 pub mod traverse;
@@ -32,18 +39,23 @@ use glam::DVec3;
 
 use crate::accel::triangles::SceneTriangles;
 use crate::geom::Aabb;
+use build::BinaryNode;
 
-/// The deepest a tree may get (build switches to median splits well before).
+/// The deepest the binary tree may get (the build switches to median splits well
+/// before); the wide tree is never deeper.
 pub const MAX_DEPTH: usize = 96;
+
+/// The largest leaf (triangles in one slot).
+pub const MAX_LEAF_SIZE: usize = 16;
 
 /// Build parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct BvhOptions {
-    /// Bins per axis for the SAH sweep.
+    /// Bins per axis for the SAH sweep (2..=64).
     pub bins: usize,
-    /// Ranges up to this size may become leaves when the SAH prefers it; larger ones
-    /// are always split.
+    /// Ranges up to this size (at most [`MAX_LEAF_SIZE`]) may become leaves when the
+    /// SAH prefers it; larger ones are always split.
     pub max_leaf_size: usize,
     /// Cost of visiting a node relative to one triangle test (SAH).
     pub traversal_cost: f64,
@@ -59,73 +71,116 @@ impl Default for BvhOptions {
     }
 }
 
-/// A node: its box in single precision (rounded outwards) and either two children
-/// (`count == 0`, children at `first` and `first + 1`) or `count` triangles from
-/// `first`.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[repr(C)]
-pub struct BvhNode {
-    /// Lower corner.
-    pub min: [f32; 3],
-    /// Left child (interior) or first triangle (leaf).
-    pub first: u32,
-    /// Upper corner.
-    pub max: [f32; 3],
-    /// Number of triangles (0 for interior nodes).
-    pub count: u32,
+/// What a slot of a [`BvhNode`] holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Slot {
+    /// Nothing (a node with fewer than four children).
+    Empty,
+    /// An interior node.
+    Node(u32),
+    /// A leaf: `count` triangles from `first` (in leaf order).
+    Leaf {
+        /// The first triangle.
+        first: u32,
+        /// How many.
+        count: u32,
+    },
 }
 
-impl BvhNode {
-    /// Whether it is a leaf.
-    #[inline(always)]
-    #[must_use]
-    pub fn is_leaf(&self) -> bool {
-        self.count > 0
-    }
+/// A 4-wide node: the boxes of up to four children, as structure of arrays, and what
+/// each child is. Empty slots have the box `[+inf, +inf]`, which no ray enters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct BvhNode {
+    /// Lower corners: `min[axis][child]`.
+    pub min: [[f32; 4]; 3],
+    /// Upper corners: `max[axis][child]`.
+    pub max: [[f32; 4]; 3],
+    /// Per child: the node index (interior) or the first triangle (leaf).
+    pub child: [u32; 4],
+    /// Per child: 0 for an interior node or an empty slot, else the leaf's triangle
+    /// count.
+    pub count: [u32; 4],
+}
 
-    /// The box in double precision.
-    #[must_use]
-    pub fn aabb(&self) -> Aabb {
-        Aabb {
-            min: DVec3::new(
-                f64::from(self.min[0]),
-                f64::from(self.min[1]),
-                f64::from(self.min[2]),
-            ),
-            max: DVec3::new(
-                f64::from(self.max[0]),
-                f64::from(self.max[1]),
-                f64::from(self.max[2]),
-            ),
+const EMPTY_CHILD: u32 = u32::MAX;
+
+impl Default for BvhNode {
+    fn default() -> Self {
+        BvhNode {
+            min: [[f32::INFINITY; 4]; 3],
+            max: [[f32::INFINITY; 4]; 3],
+            child: [EMPTY_CHILD; 4],
+            count: [0; 4],
         }
     }
 }
 
-/// Two sibling nodes in one cache line.
-#[derive(Clone, Copy, Debug, Default)]
-#[repr(C, align(64))]
-pub(crate) struct NodePair(pub(crate) [BvhNode; 2]);
+impl BvhNode {
+    /// What slot `k` holds.
+    #[must_use]
+    pub fn slot(&self, k: usize) -> Slot {
+        match (self.child[k], self.count[k]) {
+            (EMPTY_CHILD, 0) => Slot::Empty,
+            (c, 0) => Slot::Node(c),
+            (first, count) => Slot::Leaf { first, count },
+        }
+    }
+
+    /// The box of slot `k` in double precision (meaningless for empty slots).
+    #[must_use]
+    pub fn slot_box(&self, k: usize) -> Aabb {
+        Aabb {
+            min: DVec3::new(
+                f64::from(self.min[0][k]),
+                f64::from(self.min[1][k]),
+                f64::from(self.min[2][k]),
+            ),
+            max: DVec3::new(
+                f64::from(self.max[0][k]),
+                f64::from(self.max[1][k]),
+                f64::from(self.max[2][k]),
+            ),
+        }
+    }
+
+    fn set(&mut self, k: usize, b: &BinaryNode, slot: Slot) {
+        for axis in 0..3 {
+            self.min[axis][k] = b.min[axis];
+            self.max[axis][k] = b.max[axis];
+        }
+        (self.child[k], self.count[k]) = match slot {
+            Slot::Empty => (EMPTY_CHILD, 0),
+            Slot::Node(i) => (i, 0),
+            Slot::Leaf { first, count } => (first, count),
+        };
+    }
+}
 
 /// Figures of a build.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BvhBuildStats {
-    /// Milliseconds spent building (including the triangle copy).
+    /// Milliseconds spent building (binary SAH build, collapse, triangle copy).
     pub build_ms: f64,
-    /// Number of nodes.
+    /// Nodes of the binary SAH tree.
+    pub binary_nodes: usize,
+    /// Depth of the binary tree (the root alone has depth 1).
+    pub binary_depth: usize,
+    /// 4-wide nodes.
     pub nodes: usize,
-    /// Number of leaves.
+    /// Leaves (triangle ranges).
     pub leaves: usize,
-    /// Depth (the root alone has depth 1).
+    /// Depth of the 4-wide tree in nodes (leaves sit in their parent's slots).
     pub depth: usize,
-    /// The SAH cost of the tree (expected node visits + triangle tests of a random
-    /// ray hitting the root box, with the build's costs).
+    /// The SAH cost of the binary tree (expected node visits + triangle tests of a
+    /// random ray meeting the root box, with the build's costs).
     pub sah_cost: f64,
 }
 
-/// A bounding-volume hierarchy over triangles (see the module doc).
+/// A 4-wide bounding-volume hierarchy over triangles (see the module doc).
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    pairs: Vec<NodePair>,
+    nodes: Vec<BvhNode>,
     triangles: Vec<[DVec3; 3]>,
     polygons: Vec<u32>,
     order: Vec<u32>,
@@ -138,8 +193,32 @@ impl Bvh {
     #[must_use]
     pub fn build(triangles: &SceneTriangles, options: &BvhOptions) -> Self {
         let start = Instant::now();
-        let mut bvh = build::build(triangles, options);
-        bvh.stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
+        let tree = build::build(triangles, options);
+        let mut bvh = Bvh {
+            nodes: collapse(&tree.nodes),
+            scale: tree.scale,
+            ..Bvh::default()
+        };
+        let verts = triangles.vertices();
+        let polys = triangles.triangle_polygons();
+        bvh.triangles = tree.order.iter().map(|&i| verts[i as usize]).collect();
+        bvh.polygons = tree.order.iter().map(|&i| polys[i as usize]).collect();
+        bvh.order = tree.order;
+        let depth = bvh
+            .nodes_with_depth()
+            .iter()
+            .map(|n| n.1)
+            .max()
+            .unwrap_or(0);
+        bvh.stats = BvhBuildStats {
+            build_ms: start.elapsed().as_secs_f64() * 1e3,
+            binary_nodes: tree.nodes.len(),
+            binary_depth: tree.depth,
+            nodes: bvh.nodes.len(),
+            leaves: tree.leaves,
+            depth,
+            sah_cost: tree.sah_cost,
+        };
         bvh
     }
 
@@ -155,17 +234,17 @@ impl Bvh {
         self.triangles.is_empty()
     }
 
-    /// Node `i` (the root is 0; node 1 does not exist, it pads the root's pair).
+    /// Node `i` (the root is 0).
     #[inline(always)]
     #[must_use]
     pub fn node(&self, i: u32) -> &BvhNode {
-        &self.pairs[(i >> 1) as usize].0[(i & 1) as usize]
+        &self.nodes[i as usize]
     }
 
-    /// The root, if the tree is not empty.
+    /// The number of nodes.
     #[must_use]
-    pub fn root(&self) -> Option<&BvhNode> {
-        (!self.is_empty()).then(|| self.node(0))
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
     }
 
     /// The triangles in leaf order.
@@ -198,27 +277,32 @@ impl Bvh {
     #[must_use]
     pub fn nodes_with_depth(&self) -> Vec<(u32, usize)> {
         let mut out = Vec::new();
-        if self.is_empty() {
+        if self.nodes.is_empty() {
             return out;
         }
         let mut stack = vec![(0u32, 1usize)];
         while let Some((i, d)) = stack.pop() {
             out.push((i, d));
             let n = self.node(i);
-            if !n.is_leaf() {
-                stack.push((n.first + 1, d + 1));
-                stack.push((n.first, d + 1));
+            for k in (0..4).rev() {
+                if let Slot::Node(c) = n.slot(k) {
+                    stack.push((c, d + 1));
+                }
             }
         }
         out
     }
 
     /// Checks the structural invariants: every triangle in exactly one leaf, every
-    /// child box inside its parent's, every leaf box containing its triangles, depth
-    /// within [`MAX_DEPTH`]. Returns what is wrong.
+    /// child's boxes inside the box its parent keeps for it, every leaf box containing
+    /// its triangles, the depth within [`MAX_DEPTH`]. Returns what is wrong.
     pub fn check_invariants(&self) -> Result<(), String> {
-        if self.is_empty() {
-            return Ok(());
+        if self.nodes.is_empty() {
+            return if self.triangles.is_empty() {
+                Ok(())
+            } else {
+                Err("triangles but no nodes".into())
+            };
         }
         let mut seen = vec![0u32; self.triangles.len()];
         for (i, depth) in self.nodes_with_depth() {
@@ -226,23 +310,38 @@ impl Bvh {
                 return Err(format!("node {i} at depth {depth} > {MAX_DEPTH}"));
             }
             let n = self.node(i);
-            let b = n.aabb();
-            if n.is_leaf() {
-                let range = n.first as usize..(n.first + n.count) as usize;
-                if range.end > self.triangles.len() {
-                    return Err(format!("leaf {i} points past the triangles"));
-                }
-                for k in range {
-                    seen[k] += 1;
-                    if let Some(v) = self.triangles[k].iter().find(|&&v| !b.contains(v)) {
-                        return Err(format!("leaf {i}: vertex {v:?} outside {b:?}"));
+            for k in 0..4 {
+                let b = n.slot_box(k);
+                match n.slot(k) {
+                    Slot::Empty => {}
+                    Slot::Leaf { first, count } => {
+                        let range = first as usize..(first + count) as usize;
+                        if range.end > self.triangles.len() {
+                            return Err(format!("leaf {i}/{k} points past the triangles"));
+                        }
+                        for t in range {
+                            seen[t] += 1;
+                            if let Some(v) = self.triangles[t].iter().find(|&&v| !b.contains(v)) {
+                                return Err(format!("leaf {i}/{k}: vertex {v:?} outside {b:?}"));
+                            }
+                        }
                     }
-                }
-            } else {
-                for c in [n.first, n.first + 1] {
-                    let cb = self.node(c).aabb();
-                    if !(b.contains(cb.min) && b.contains(cb.max)) {
-                        return Err(format!("child {c} {cb:?} not inside parent {i} {b:?}"));
+                    Slot::Node(c) => {
+                        if c as usize >= self.nodes.len() || c <= i {
+                            return Err(format!("node {i}/{k} points to node {c}"));
+                        }
+                        let child = self.node(c);
+                        for kk in 0..4 {
+                            if child.slot(kk) == Slot::Empty {
+                                continue;
+                            }
+                            let cb = child.slot_box(kk);
+                            if !(b.contains(cb.min) && b.contains(cb.max)) {
+                                return Err(format!(
+                                    "node {c} slot {kk} {cb:?} not inside its box in {i}: {b:?}"
+                                ));
+                            }
+                        }
                     }
                 }
             }
@@ -257,6 +356,65 @@ impl Bvh {
         }
         Ok(())
     }
+}
+
+/// Collapses a binary tree into a 4-wide one (see the module doc).
+fn collapse(binary: &[BinaryNode]) -> Vec<BvhNode> {
+    let Some(root) = binary.first() else {
+        return Vec::new();
+    };
+    let mut wide = vec![BvhNode::default()];
+    if root.is_leaf() {
+        wide[0].set(
+            0,
+            root,
+            Slot::Leaf {
+                first: root.first,
+                count: root.count,
+            },
+        );
+        return wide;
+    }
+    // (binary interior node, wide node that represents it)
+    let mut stack = vec![(0u32, 0u32)];
+    let mut kids: Vec<u32> = Vec::with_capacity(4);
+    while let Some((b, w)) = stack.pop() {
+        let node = &binary[b as usize];
+        kids.clear();
+        kids.extend([node.first, node.first + 1]);
+        while kids.len() < 4 {
+            let open = kids
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| !binary[**c as usize].is_leaf())
+                .max_by(|a, b| {
+                    binary[*a.1 as usize]
+                        .half_area()
+                        .total_cmp(&binary[*b.1 as usize].half_area())
+                })
+                .map(|(k, _)| k);
+            let Some(k) = open else { break };
+            let c = kids.swap_remove(k);
+            let first = binary[c as usize].first;
+            kids.extend([first, first + 1]);
+        }
+        for (k, &c) in kids.iter().enumerate() {
+            let child = &binary[c as usize];
+            let slot = if child.is_leaf() {
+                Slot::Leaf {
+                    first: child.first,
+                    count: child.count,
+                }
+            } else {
+                let index = wide.len() as u32;
+                wide.push(BvhNode::default());
+                stack.push((c, index));
+                Slot::Node(index)
+            };
+            wide[w as usize].set(k, child, slot);
+        }
+    }
+    wide
 }
 
 /// Rounds down to `f32` (the largest `f32` not above `x`).
@@ -279,10 +437,9 @@ mod tests {
     use crate::scene::demo;
 
     #[test]
-    fn node_is_32_bytes_and_pairs_fill_a_cache_line() {
-        assert_eq!(std::mem::size_of::<BvhNode>(), 32);
-        assert_eq!(std::mem::size_of::<NodePair>(), 64);
-        assert_eq!(std::mem::align_of::<NodePair>(), 64);
+    fn node_is_two_cache_lines() {
+        assert_eq!(std::mem::size_of::<BvhNode>(), 128);
+        assert_eq!(std::mem::align_of::<BvhNode>(), 64);
     }
 
     #[test]
@@ -303,11 +460,43 @@ mod tests {
             let bvh = Bvh::build(&tris, &BvhOptions::default());
             bvh.check_invariants().unwrap();
             let s = bvh.stats();
-            assert_eq!(s.nodes, 2 * s.leaves - 1);
-            assert!(s.depth >= 1 && s.depth <= MAX_DEPTH);
+            assert_eq!(s.binary_nodes, 2 * s.leaves - 1);
+            assert!(s.depth >= 1 && s.depth <= s.binary_depth);
+            // Collapsing keeps every binary leaf and removes interior nodes (each wide
+            // node absorbs up to three binary ones).
+            let leaves: usize = (0..bvh.node_count() as u32)
+                .map(|i| {
+                    (0..4)
+                        .filter(|&k| matches!(bvh.node(i).slot(k), Slot::Leaf { .. }))
+                        .count()
+                })
+                .sum();
+            assert_eq!(leaves, s.leaves);
+            let interior = s.binary_nodes - s.leaves;
+            assert!(
+                s.nodes * 3 >= interior && s.nodes < interior.max(2),
+                "{s:?}"
+            );
         }
         let empty = Bvh::build(&SceneTriangles::default(), &BvhOptions::default());
-        assert!(empty.root().is_none());
+        assert_eq!(empty.node_count(), 0);
         empty.check_invariants().unwrap();
+    }
+
+    #[test]
+    fn a_single_triangle_is_a_root_with_one_leaf() {
+        let mut b = crate::scene::MeshBuilder::new();
+        for p in [DVec3::ZERO, DVec3::X, DVec3::Y] {
+            b.push_position(p);
+        }
+        b.push_face(&[0, 1, 2], None).unwrap();
+        let mut s = crate::Scene::new();
+        s.add(crate::scene::ObjectDesc::new("t", b.finish().0))
+            .unwrap();
+        let bvh = Bvh::build(&SceneTriangles::new(&s), &BvhOptions::default());
+        assert_eq!(bvh.node_count(), 1);
+        assert_eq!(bvh.node(0).slot(0), Slot::Leaf { first: 0, count: 1 });
+        assert_eq!(bvh.node(0).slot(1), Slot::Empty);
+        bvh.check_invariants().unwrap();
     }
 }
