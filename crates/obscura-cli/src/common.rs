@@ -110,9 +110,16 @@ impl ViewArgs {
         })
     }
 
-    /// The checked viewport.
+    /// The checked viewport: `--size`, else the scene's own size, else 1280x720.
     pub fn viewport(&self, scene: &Scene) -> Result<Viewport> {
-        let (w, h) = self.size.unwrap_or_else(|| default_size(scene));
+        self.viewport_or(scene, DEFAULT_SIZE)
+    }
+
+    /// The checked viewport with another default size.
+    pub fn viewport_or(&self, scene: &Scene, default: (u64, u64)) -> Result<Viewport> {
+        let (w, h) = self
+            .size
+            .unwrap_or_else(|| default_size(scene).unwrap_or(default));
         Viewport::new(w, h)
     }
 
@@ -175,10 +182,10 @@ impl ViewArgs {
 }
 
 /// Scenes that carry a camera made for a size (the seed's 32x32 task) get that size.
-fn default_size(scene: &Scene) -> (u64, u64) {
+fn default_size(scene: &Scene) -> Option<(u64, u64)> {
     match scene.camera() {
-        Some(c) if *c == obscura::scene::demo::seed_task_camera() => (32, 32),
-        _ => DEFAULT_SIZE,
+        Some(c) if *c == obscura::scene::demo::seed_task_camera() => Some((32, 32)),
+        _ => None,
     }
 }
 

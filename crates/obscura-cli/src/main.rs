@@ -1,6 +1,9 @@
 //! `obscura`: render, compare and benchmark visibility algorithms from the command line.
 
+mod bench;
 mod common;
+mod compare;
+mod grid;
 mod render;
 
 use std::process::ExitCode;
@@ -21,12 +24,21 @@ enum Command {
     /// Render a scene to a PNG (and optionally face ids and depths as NumPy arrays).
     #[command(after_help = render::EXAMPLES)]
     Render(render::RenderArgs),
+    /// Render with every algorithm (or a list), compare each to the z-buffer, and write a
+    /// grid of pictures and difference masks.
+    #[command(after_help = compare::EXAMPLES)]
+    Compare(compare::CompareArgs),
+    /// Time each algorithm over a sweep of face counts and fit the growth exponent.
+    #[command(after_help = bench::EXAMPLES)]
+    Bench(bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render::run(&args),
+        Command::Compare(args) => compare::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -65,11 +65,11 @@ pub struct RenderArgs {
     pub stats_json: Option<PathBuf>,
 }
 
-fn parse_algo(s: &str) -> std::result::Result<Algorithm, String> {
+pub fn parse_algo(s: &str) -> std::result::Result<Algorithm, String> {
     s.parse().map_err(|e: obscura::Error| e.to_string())
 }
 
-fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {
+pub fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {
     s.parse().map_err(|e: obscura::Error| e.to_string())
 }
 

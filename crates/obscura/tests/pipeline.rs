@@ -89,6 +89,9 @@ fn cube_head_on_covers_the_expected_square() {
     }
 }
 
+/// A face id, its projected polygon and whether it faces the camera.
+type ProjectedFace = (u32, Vec<(f64, f64)>, bool);
+
 #[test]
 fn cube_from_known_cameras_covers_the_projected_faces() {
     // For several cameras, project each face of the cube with the textbook formulas and
@@ -135,7 +138,7 @@ fn cube_from_known_cameras_covers_the_projected_faces() {
         let f = zbuffer(&scene, &cam, w, h, &PrepareOptions::default());
         let (right, up, fwd) = cam.basis();
         let _ = (right, up);
-        let faces: Vec<(u32, Vec<(f64, f64)>, bool)> = (0..6)
+        let faces: Vec<ProjectedFace> = (0..6)
             .map(|p| {
                 let pts = cube.world_polygon(p);
                 let n = (pts[1] - pts[0]).cross(pts[2] - pts[0]);

@@ -1,17 +1,42 @@
 //! Clipping: every algorithm of the seeds, each a documented public function.
 //!
-//! | algorithm | function | seed |
-//! | --- | --- | --- |
-//! | outcodes of the view volume (6 bits, seed's bit order) | [`outcode_homogeneous`] | 000 |
-//! | Sutherland-Hodgman 3D, homogeneous, six chained stages | [`sutherland_hodgman::clip_polygon_homogeneous`] | 000 |
-//! | split a convex polygon by a plane into front and back pieces | [`split::split_polygon`] | 000 (BSP) |
+//! | algorithm | region | function | seed |
+//! | --- | --- | --- | --- |
+//! | outcodes of the view volume (6 bits, seed's bit order) | `-w <= x, y, z <= w` | [`outcode_homogeneous`] | 000 |
+//! | Cohen-Sutherland 2D: 4-bit codes (eq. 6.5), 9 regions, iterative | rectangle | [`cohen_sutherland::clip_segment_2d`] | 001 §6.1.1 |
+//! | Cohen-Sutherland 3D: 6-bit codes, 27 regions, recursive `CS_Clip_3D` | box | [`cohen_sutherland::clip_segment_box`] | 000 |
+//! | Cohen-Sutherland 3D with the t-formulae (3) | homogeneous | [`cohen_sutherland::clip_segment_homogeneous`] | 000 |
+//! | segment vs any convex polygon, `n`-bit region codes, XOR, sorted `T_i` | convex window | [`region_codes::clip_segment`], [`region_codes::clip_segment_traced`] | 001 §6.1.1 |
+//! | Liang-Barsky, `t p_i <= q_i` | rectangle | [`liang_barsky::clip_segment_2d`] | 000 (2D form) |
+//! | Liang-Barsky 3D, the seed's p/q table | homogeneous | [`liang_barsky::clip_segment_homogeneous`] | 000 |
+//! | Liang-Barsky 3D, orthographic cube form | box | [`liang_barsky::clip_segment_box`] | 000 |
+//! | Sutherland-Hodgman 3D, six chained stages (the view pipeline's) | homogeneous | [`sutherland_hodgman::clip_polygon_homogeneous`] | 000 |
+//! | Sutherland-Hodgman 2D, one stage per window edge | convex window | [`sutherland_hodgman::clip_polygon_2d`] | 000, 001 §6.1 |
+//! | Sutherland-Hodgman 3D, parallel projection | box | [`sutherland_hodgman::clip_polygon_box`] | 000 |
+//! | Sutherland-Hodgman on a segment (open 2-vertex polyline) | all three | [`sutherland_hodgman::clip_segment_2d`], [`sutherland_hodgman::clip_segment_box`], [`sutherland_hodgman::clip_segment_homogeneous`] | 000 |
+//! | clipping before vs after the projection | both | [`projection_order`] | 001 introduction |
+//! | split a convex polygon by a plane into front and back pieces | plane | [`split::split_polygon`] | 000 (BSP) |
 //!
 //! Clip space is OpenGL's: the view volume is `-w <= x, y, z <= w`. Clipping happens
 //! before the divide by `w`, which is what makes primitives crossing the eye plane
-//! (`w <= 0`) come out right.
+//! (`w <= 0`) come out right ([`projection_order`] shows both orders).
+//!
+//! Windows: [`Rect`] (axis-aligned, for Cohen-Sutherland and Liang-Barsky) and
+//! [`ConvexWindow`] (any strictly convex polygon, either winding; non-convex and
+//! degenerate ones are refused with a [`WindowError`]). Boxes are [`crate::geom::Aabb`].
+//! Every segment clipper returns the visible part with its endpoints in the input
+//! order, returns an unclipped endpoint bit for bit, and gives `None` for non-finite
+//! input; the tests in `tests/clipping.rs` check that all of them agree.
 
+pub mod cohen_sutherland;
+pub mod liang_barsky;
+pub mod projection_order;
+pub mod region_codes;
 pub mod split;
 pub mod sutherland_hodgman;
+pub mod window;
+
+pub use window::{ConvexWindow, EdgeLine, Rect, WindowError, polygon_area_2d};
 
 use glam::DVec4;
 

@@ -39,6 +39,9 @@ pub enum Split {
 
 /// Splits a convex polygon by a plane. See the module doc for `eps`.
 ///
+/// Degenerate input splits nothing: a plane whose normal is zero or not finite, or a
+/// "polygon" of fewer than three vertices, gives [`Split::Front`].
+///
 /// ```
 /// use obscura::clip::split::{split_polygon, Split};
 /// use obscura::geom::Plane;
@@ -53,6 +56,9 @@ pub enum Split {
 #[must_use]
 pub fn split_polygon(points: &[DVec3], plane: &Plane, eps: f64) -> Split {
     let len = plane.normal.length();
+    if points.len() < 3 || !(len > 0.0 && len.is_finite() && plane.d.is_finite()) {
+        return Split::Front;
+    }
     let dist: Vec<f64> = points.iter().map(|&p| plane.evaluate(p) / len).collect();
     let side = |d: f64| {
         if d > eps {

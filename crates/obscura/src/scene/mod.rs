@@ -12,6 +12,7 @@ mod camera;
 pub mod demo;
 pub mod load;
 mod mesh;
+pub mod random;
 
 use std::path::Path;
 use std::sync::Arc;

@@ -1,19 +1,42 @@
 //! Loading scenes from files: one module per format, all going through
-//! [`MeshBuilder`](super::MeshBuilder) so that bad faces are handled the same way.
+//! [`MeshBuilder`] so that bad faces are handled the same way.
 //!
 //! | extension | format | module |
 //! | --- | --- | --- |
-//! | `.obj` | Wavefront OBJ with groups and MTL diffuse colours | `obj` |
-//! | `.gltf`, `.glb` | glTF 2.0 | `gltf` |
-//! | `.stl` | STL, binary or ASCII | `stl` |
-//! | `.ply` | PLY, ASCII or binary | `ply` |
-//! | `.toml` | an obscura scene file placing meshes | `toml_scene` |
+//! | `.obj` | Wavefront OBJ with objects, groups and MTL diffuse colours | [`obj`] |
+//! | `.gltf`, `.glb` | glTF 2.0 (node hierarchy, base colour) | [`gltf`] |
+//! | `.stl` | STL, binary or ASCII | [`stl`] |
+//! | `.ply` | PLY, ASCII or binary (either byte order) | [`ply`] |
+//! | `.toml` | an obscura scene file placing meshes (`docs/scene-files.md`) | [`toml_scene`] |
+//!
+//! Input: a path. Output: a [`Loaded`] (objects in file order, a [`LoadReport`], the
+//! file's up axis when the format has one) or, through [`load_file`], a [`Scene`].
+//!
+//! Rules shared by every loader (see `docs/ARCHITECTURE.md`):
+//! - errors name the file and the line (text formats) or the element (binary and
+//!   structured formats: facet, vertex, mesh, primitive, accessor);
+//! - a non-finite coordinate (NaN, infinity, a value overflowing `f64`) is an error,
+//!   found by the loader before the vertex reaches the builder;
+//! - degenerate faces are dropped and counted, non-planar and concave n-gons are
+//!   triangulated and counted, by [`MeshBuilder`];
+//! - face ids follow the file's face order;
+//! - an empty file, or one without a usable face, is [`Error::EmptyScene`].
+//!
+//! Complexity: every loader is linear in the file size (plus the hashing of vertex
+//! positions where a format needs welding). Files are read whole into memory.
+
+pub mod gltf;
+pub mod mtl;
+pub mod obj;
+pub mod ply;
+pub mod stl;
+pub mod toml_scene;
 
 use std::path::Path;
 
 use glam::DVec3;
 
-use super::{LoadReport, ObjectDesc, Scene};
+use super::{LoadReport, MeshBuilder, ObjectDesc, Scene};
 use crate::{Error, Result};
 
 /// What a mesh file yields before it is placed in a scene.
@@ -27,28 +50,45 @@ pub struct Loaded {
     pub up: Option<DVec3>,
 }
 
-/// Loads the objects of a mesh file (not a scene file), by extension.
-pub fn load_objects(path: &Path) -> Result<Loaded> {
-    let ext = path
-        .extension()
+/// The mesh formats [`load_objects`] reads, by lower-case extension.
+pub const MESH_EXTENSIONS: [&str; 5] = ["obj", "gltf", "glb", "stl", "ply"];
+
+/// Lower-case extension of a path, if it has one.
+fn extension(path: &Path) -> Option<String> {
+    path.extension()
         .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("obj") => unsupported_yet(path),
-        _ => Err(Error::UnsupportedFormat {
+        .map(str::to_ascii_lowercase)
+}
+
+/// Loads the objects of a mesh file (not a scene file), by extension.
+///
+/// A file that is empty or holds only white space yields no objects (the caller turns
+/// that into [`Error::EmptyScene`]).
+pub fn load_objects(path: &Path) -> Result<Loaded> {
+    let ext = extension(path);
+    let Some(ext) = ext.filter(|e| MESH_EXTENSIONS.contains(&e.as_str())) else {
+        return Err(Error::UnsupportedFormat {
             path: path.to_path_buf(),
-        }),
+        });
+    };
+    let bytes = read_file(path)?;
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Ok(Loaded::default());
+    }
+    match ext.as_str() {
+        "obj" => obj::load(path, &bytes),
+        "gltf" | "glb" => gltf::load(path, &bytes),
+        "stl" => stl::load(path, bytes),
+        "ply" => ply::load(path, &bytes),
+        _ => unreachable!("filtered by MESH_EXTENSIONS"),
     }
 }
 
-fn unsupported_yet(path: &Path) -> Result<Loaded> {
-    Err(Error::UnsupportedFormat {
-        path: path.to_path_buf(),
-    })
-}
-
-/// Loads a scene file or a mesh file into a scene.
+/// Loads a scene file (`.toml`) or a mesh file into a scene.
 pub fn load_file(path: &Path) -> Result<Scene> {
+    if extension(path).as_deref() == Some("toml") {
+        return toml_scene::load(path);
+    }
     let loaded = load_objects(path)?;
     scene_from(loaded, &path.display().to_string())
 }
@@ -65,4 +105,53 @@ pub fn scene_from(loaded: Loaded, what: &str) -> Result<Scene> {
     }
     scene.ensure_not_empty(what)?;
     Ok(scene)
+}
+
+/// Reads a whole file, naming it in the error.
+pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| Error::io(path, e))
+}
+
+/// The file name without extension, for naming objects that have no name.
+pub(crate) fn file_stem(path: &Path) -> String {
+    path.file_stem()
+        .map_or_else(|| "mesh".to_string(), |s| s.to_string_lossy().into_owned())
+}
+
+/// Finishes a builder into an object, merging its report into `report`.
+pub(crate) fn finish_object(
+    name: String,
+    builder: MeshBuilder,
+    color: [f32; 3],
+    report: &mut LoadReport,
+) -> ObjectDesc {
+    let (mesh, r) = builder.finish();
+    report.merge(&r);
+    ObjectDesc::new(name, mesh).with_color(color)
+}
+
+/// A colour for files that give none: the scene palette, by object order.
+pub(crate) fn palette_color(k: usize) -> [f32; 3] {
+    super::PALETTE[k % super::PALETTE.len()]
+}
+
+/// Clamps a colour read from a file into `0..=1` (non-finite components become 0).
+pub(crate) fn clamp_color(c: [f64; 3]) -> [f32; 3] {
+    c.map(|v| {
+        if v.is_finite() {
+            v.clamp(0.0, 1.0) as f32
+        } else {
+            0.0
+        }
+    })
+}
+
+/// The 1-based line of a byte offset in a text.
+pub(crate) fn line_of_offset(text: &str, offset: usize) -> usize {
+    let end = offset.min(text.len());
+    text.as_bytes()[..end]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
 }

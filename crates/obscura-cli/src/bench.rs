@@ -1,0 +1,260 @@
+//! `obscura bench`: each algorithm over a sweep of face counts, with the fitted growth
+//! exponent, to check the seeds' complexity table (seed 000, "Περίληψη").
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use obscura::scene::{MeshBuilder, ObjectDesc, random::scaled_triangles};
+use obscura::surface::{Algorithm, RenderOptions, render};
+use obscura::{Result, Scene, prepare};
+use serde_json::json;
+
+use crate::common::ViewArgs;
+
+pub const EXAMPLES: &str = "\
+Examples:
+  obscura bench                                    # generated triangles, 100 to 1,000,000 faces
+  obscura bench --algos zbuffer,raycast-bvh,bsp --budget 20
+  obscura bench ../shared/data/sponza.obj --eye 0,-10,2 --target 0,10,4 --up 0,0,1 --fov 60 --threads 1
+
+Without SCENE the sweep uses generated scenes whose triangles tile a fixed screen area
+four layers deep (each triangle shrinks as their number grows). With SCENE it renders
+evenly spread subsets of the scene's faces.";
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Comma-separated algorithms (default: all).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::render::parse_algo)]
+    pub algos: Option<Vec<Algorithm>>,
+    /// The largest face count of the sweep.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub max_faces: usize,
+    /// Seconds an algorithm may take for one size; sizes predicted to take longer are skipped.
+    #[arg(long, default_value_t = 60.0)]
+    pub budget: f64,
+    /// Also write the results as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+/// What the seeds' table predicts for the exponent in P (faces) at a fixed image size.
+fn expected(a: Algorithm) -> &'static str {
+    match a {
+        Algorithm::ZBuffer => "O(Ps) ~ O(p): ~0..1",
+        Algorithm::Scanline => "~0..1",
+        Algorithm::DepthSort | Algorithm::DepthSortMatrix => "O(P log P) .. O(P^2)",
+        Algorithm::Bsp => "build O(P^2) worst",
+        Algorithm::Warnock => "~0..1",
+        Algorithm::Raycast => "O(pP): 1",
+        Algorithm::RaycastBounds => "O(pP)/objects: 1",
+        Algorithm::RaycastBvh => "O(p log P): ~0",
+        Algorithm::RaycastGrid => "~0",
+        Algorithm::Octree => "~0..1",
+    }
+}
+
+/// Faces `0, k, 2k, ...` of the scene so that about `n` remain, keeping each object's
+/// transform and flags (the subset is no longer closed).
+fn subset(scene: &Scene, n: usize) -> Scene {
+    let total = scene.polygon_count();
+    let mut out = Scene::new();
+    let mut g = 0usize;
+    let mut taken = 0usize;
+    for o in scene.objects() {
+        let mut b = MeshBuilder::new();
+        for &p in o.mesh.positions() {
+            b.push_position(p);
+        }
+        for p in 0..o.mesh.polygon_count() {
+            // take polygon g when floor(g * n / total) steps
+            if (g + 1) * n / total > g * n / total && taken < n {
+                b.push_face(o.mesh.polygon(p), None)
+                    .expect("indices of a valid mesh");
+                taken += 1;
+            }
+            g += 1;
+        }
+        if b.face_count() > 0 {
+            let desc = ObjectDesc::new(o.name.clone(), b.finish().0)
+                .with_transform(o.transform)
+                .with_color(o.color)
+                .with_closed(false)
+                .with_convex(false);
+            out.add(desc).expect("subset of a valid object");
+        }
+    }
+    out.set_camera(scene.camera().copied());
+    out
+}
+
+/// Least-squares slope of log(time) against log(n), over points above 1 ms.
+fn growth_exponent(points: &[(usize, f64)]) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.1 >= 1.0)
+        .map(|&(n, t)| ((n as f64).ln(), t.ln()))
+        .collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    let m = pts.len() as f64;
+    let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (mx, my) = (sx / m, sy / m);
+    let (num, den) = pts.iter().fold((0.0, 0.0), |a, p| {
+        (a.0 + (p.0 - mx) * (p.1 - my), a.1 + (p.0 - mx) * (p.0 - mx))
+    });
+    (den > 0.0).then(|| num / den)
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let base = match &args.view.scene {
+        Some(_) => Some(args.view.load()?),
+        None => None,
+    };
+    let max = match &base {
+        Some(l) => args.max_faces.min(l.scene.polygon_count()),
+        None => args.max_faces,
+    };
+    let mut sizes: Vec<usize> = [
+        100, 300, 1_000, 3_000, 10_000, 30_000, 100_000, 300_000, 1_000_000,
+    ]
+    .into_iter()
+    .filter(|&n| n < max)
+    .collect();
+    sizes.push(max);
+    let algos = args
+        .algos
+        .clone()
+        .unwrap_or_else(|| Algorithm::ALL.to_vec());
+    let scene_for = |n: usize| -> Scene {
+        match &base {
+            Some(l) if n >= l.scene.polygon_count() => l.scene.clone(),
+            Some(l) => subset(&l.scene, n),
+            None => scaled_triangles(n, 1),
+        }
+    };
+    println!(
+        "sweep over {} ({} threads); times in ms of prepare + render; sizes predicted to exceed {} s are skipped",
+        base.as_ref()
+            .map_or("generated scaled triangles", |l| l.spec.as_str()),
+        args.view
+            .threads
+            .map_or_else(|| "all".to_string(), |t| t.to_string()),
+        args.budget
+    );
+    let mut results: Vec<(Algorithm, Vec<(usize, f64)>)> =
+        algos.iter().map(|&a| (a, Vec::new())).collect();
+    let options = RenderOptions::default();
+    for &n in &sizes {
+        let scene = scene_for(n);
+        let viewport = args.view.viewport_or(&scene, (640, 360))?;
+        let camera = args.view.camera(&scene, viewport)?;
+        let prep = args.view.prepare_options();
+        for (algorithm, points) in &mut results {
+            // Predict from the last two points (or assume quadratic growth from one).
+            let predicted = match points.as_slice() {
+                [.., (n0, t0), (n1, t1)] if *t0 > 0.0 && *t1 > 0.0 => {
+                    let e = ((t1 / t0).ln() / (*n1 as f64 / *n0 as f64).ln()).clamp(0.0, 3.0);
+                    t1 * (n as f64 / *n1 as f64).powf(e)
+                }
+                [.., (n1, t1)] => t1 * (n as f64 / *n1 as f64).powi(2),
+                [] => 0.0,
+            };
+            if predicted > args.budget * 1e3 || points.last().is_some_and(|p| p.1.is_nan()) {
+                continue;
+            }
+            let measure = || {
+                args.view.with_threads(|| {
+                    let start = Instant::now();
+                    let view = prepare(&scene, &camera, viewport, &prep)?;
+                    render(*algorithm, &view, &options)?;
+                    Ok::<f64, obscura::Error>(start.elapsed().as_secs_f64() * 1e3)
+                })?
+            };
+            let mut best = match measure() {
+                Ok(t) => t,
+                Err(e) => {
+                    eprintln!("{algorithm} at {n} faces: {e}");
+                    points.push((n, f64::NAN));
+                    continue;
+                }
+            };
+            // Small runs are noisy: keep the best of a few.
+            let mut repeats = 0;
+            while best < 200.0 && repeats < 4 {
+                best = best.min(measure()?);
+                repeats += 1;
+            }
+            points.push((n, best));
+            eprintln!("  {:<18} {n:>9} faces {best:>10.2} ms", algorithm.name());
+        }
+    }
+    println!();
+    print!("{:<18}", "algorithm");
+    for n in &sizes {
+        print!(" {n:>9}");
+    }
+    println!(" {:>8}  seed 000 expects", "exponent");
+    let mut doc = Vec::new();
+    for (algorithm, points) in &results {
+        print!("{:<18}", algorithm.name());
+        for n in &sizes {
+            match points.iter().find(|p| p.0 == *n) {
+                Some((_, t)) if t.is_finite() => print!(" {t:>9.1}"),
+                Some(_) => print!(" {:>9}", "error"),
+                None => print!(" {:>9}", "-"),
+            }
+        }
+        let valid: Vec<(usize, f64)> = points.iter().copied().filter(|p| p.1.is_finite()).collect();
+        let e = growth_exponent(&valid);
+        println!(
+            " {:>8}  {}",
+            e.map_or("-".to_string(), |e| format!("{e:.2}")),
+            expected(*algorithm)
+        );
+        doc.push(json!({
+            "algorithm": algorithm.name(),
+            "points": valid.iter().map(|(n, t)| json!({"faces": n, "ms": t})).collect::<Vec<_>>(),
+            "exponent": e,
+        }));
+    }
+    if let Some(p) = &args.json {
+        let text = serde_json::to_string_pretty(&json!({ "sizes": sizes, "algorithms": doc }))
+            .expect("plain JSON");
+        std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exponent_of_power_laws() {
+        let lin: Vec<(usize, f64)> = [100, 1000, 10000]
+            .iter()
+            .map(|&n| (n, n as f64 * 0.5))
+            .collect();
+        assert!((growth_exponent(&lin).unwrap() - 1.0).abs() < 1e-9);
+        let quad: Vec<(usize, f64)> = [100, 1000, 10000]
+            .iter()
+            .map(|&n| (n, (n * n) as f64 * 1e-3))
+            .collect();
+        assert!((growth_exponent(&quad).unwrap() - 2.0).abs() < 1e-9);
+        // points under 1 ms are noise and ignored
+        assert!(growth_exponent(&[(10, 0.1), (100, 5.0)]).is_none());
+    }
+
+    #[test]
+    fn subsets_spread_over_the_scene() {
+        let s = obscura::scene::demo::default_scene();
+        let total = s.polygon_count();
+        for n in [1, 10, 100, total / 2, total] {
+            assert_eq!(subset(&s, n).polygon_count(), n, "n = {n}");
+        }
+    }
+}

@@ -1,0 +1,203 @@
+//! `obscura compare`: every algorithm on one view, checked against the z-buffer.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use obscura::geom::BoundsKind;
+use obscura::surface::{Algorithm, RenderOptions, Stats, render};
+use obscura::{Frame, Result, RgbImage, prepare};
+use serde_json::json;
+
+use crate::common::ViewArgs;
+use crate::grid;
+
+pub const EXAMPLES: &str = "\
+Examples:
+  obscura compare                                  # every algorithm on the default demo
+  obscura compare demo:city --size 480x270 --algos zbuffer,scanline,bsp,raycast-bvh
+  obscura compare model.obj --eye 3,2,5 --target 0,0,0 -o grid.png --json compare.json";
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Comma-separated algorithms (default: all). The z-buffer always runs as reference.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::render::parse_algo)]
+    pub algos: Option<Vec<Algorithm>>,
+    /// Bounding volume for raycast-bounds: sphere, aabb, obb, kdop.
+    #[arg(long, default_value = "aabb", value_parser = crate::render::parse_bounds)]
+    pub bounds: BoundsKind,
+    /// The grid image: each algorithm's picture and its difference mask.
+    #[arg(
+        short = 'o',
+        long = "output",
+        value_name = "GRID.png",
+        default_value = "compare.png"
+    )]
+    pub output: PathBuf,
+    /// Also write the table as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+}
+
+/// One row of the table.
+struct Row {
+    algorithm: Algorithm,
+    result: std::result::Result<(Frame, Stats, f64), String>,
+}
+
+/// The stats worth a column: everything but the time, compactly.
+fn summary(stats: &Stats) -> String {
+    stats
+        .entries
+        .iter()
+        .filter(|(k, _)| k != "time_ms")
+        .take(5)
+        .map(|(k, v)| {
+            if v.fract() == 0.0 {
+                format!("{k}={v:.0}")
+            } else {
+                format!("{k}={v:.2}")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The picture dimmed, with pixels that differ from the reference in red and pixels
+/// where only one of them shows a face in yellow.
+fn difference_mask(picture: &RgbImage, frame: &Frame, reference: &Frame) -> RgbImage {
+    let mut out = picture.clone();
+    for (k, p) in out.pixels.iter_mut().enumerate() {
+        let (a, b) = (frame.ids[k], reference.ids[k]);
+        *p = if a == b {
+            p.map(|c| (u16::from(c) * 2 / 5) as u8)
+        } else if a == obscura::BACKGROUND || b == obscura::BACKGROUND {
+            [255, 220, 0]
+        } else {
+            [255, 40, 40]
+        };
+    }
+    out
+}
+
+fn progress_bar(name: &str) -> ProgressBar {
+    let pb = ProgressBar::new(1000);
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} {msg:<18} [{bar:30}] {percent:>3}% {elapsed}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    pb.set_message(name.to_string());
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    pb
+}
+
+pub fn run(args: &CompareArgs) -> Result<()> {
+    let loaded = args.view.load()?;
+    let scene = &loaded.scene;
+    let viewport = args.view.viewport_or(scene, (480, 270))?;
+    let camera = args.view.camera(scene, viewport)?;
+    let prep = args.view.prepare_options();
+    let mut algos: Vec<Algorithm> = args
+        .algos
+        .clone()
+        .unwrap_or_else(|| Algorithm::ALL.to_vec());
+    algos.retain(|&a| a != Algorithm::ZBuffer);
+    algos.insert(0, Algorithm::ZBuffer);
+
+    let rows = args.view.with_threads(|| {
+        let view = prepare(scene, &camera, viewport, &prep)?;
+        let mut rows = Vec::new();
+        for &algorithm in &algos {
+            let pb = progress_bar(algorithm.name());
+            let bar = pb.clone();
+            let options = RenderOptions::default()
+                .with_bounds(args.bounds)
+                .with_progress(Arc::new(move |f| bar.set_position((f * 1000.0) as u64)));
+            let start = Instant::now();
+            let result = render(algorithm, &view, &options)
+                .map(|(f, s)| (f, s, start.elapsed().as_secs_f64() * 1e3))
+                .map_err(|e| e.to_string());
+            pb.finish_and_clear();
+            rows.push(Row { algorithm, result });
+        }
+        Ok::<_, obscura::Error>(rows)
+    })??;
+
+    let reference = match &rows[0].result {
+        Ok((f, _, _)) => f.clone(),
+        Err(e) => {
+            return Err(obscura::Error::option(
+                "--algos",
+                format!("the z-buffer failed: {e}"),
+            ));
+        }
+    };
+    let pixels = viewport.pixel_count() as f64;
+    println!(
+        "{} at {}x{}: {} faces, {} triangles",
+        loaded.spec,
+        viewport.width,
+        viewport.height,
+        scene.face_count(),
+        scene.triangle_count()
+    );
+    println!(
+        "{:<18} {:>10} {:>10} {:>9}  structure",
+        "algorithm", "time ms", "differ", "agree %"
+    );
+    let mut tiles = Vec::new();
+    let mut table = Vec::new();
+    for row in &rows {
+        match &row.result {
+            Ok((frame, stats, ms)) => {
+                let differ = frame.differences(&reference).len();
+                let agree = 100.0 * (1.0 - differ as f64 / pixels);
+                println!(
+                    "{:<18} {:>10.2} {:>10} {:>9.3}  {}",
+                    row.algorithm.name(),
+                    ms,
+                    differ,
+                    agree,
+                    summary(stats)
+                );
+                let picture = frame.shade(scene, &camera);
+                let mask = difference_mask(&picture, frame, &reference);
+                tiles.push((row.algorithm.name().to_string(), picture));
+                tiles.push((format!("{} diff: {differ} px", row.algorithm.name()), mask));
+                table.push(json!({
+                    "algorithm": row.algorithm.name(), "time_ms": ms, "differing_pixels": differ,
+                    "agree_percent": agree, "stats": stats,
+                }));
+            }
+            Err(e) => {
+                println!(
+                    "{:<18} {:>10} {:>10} {:>9}  error: {e}",
+                    row.algorithm.name(),
+                    "-",
+                    "-",
+                    "-"
+                );
+                table.push(json!({ "algorithm": row.algorithm.name(), "error": e }));
+            }
+        }
+    }
+    grid::compose(&tiles, tiles.len().clamp(1, 4)).write_png(&args.output)?;
+    println!(
+        "wrote {} (each algorithm's picture and its differences from the z-buffer in red)",
+        args.output.display()
+    );
+    if let Some(p) = &args.json {
+        let doc = json!({
+            "scene": loaded.spec, "width": viewport.width, "height": viewport.height,
+            "load_ms": loaded.load_ms, "algorithms": table,
+        });
+        let text = serde_json::to_string_pretty(&doc).expect("JSON of plain values");
+        std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
+    }
+    Ok(())
+}

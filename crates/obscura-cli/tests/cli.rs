@@ -1,0 +1,190 @@
+//! The `obscura` binary's contract: what it writes and how it refuses bad input.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn obscura(args: &[&str], dir: &PathBuf) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_obscura"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("the binary runs")
+}
+
+fn tempdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("obscura-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Reads a v1 NumPy file: (descr, shape, body).
+fn read_npy(path: &PathBuf) -> (String, (usize, usize), Vec<u8>) {
+    let b = std::fs::read(path).unwrap();
+    assert_eq!(&b[..6], b"\x93NUMPY");
+    let hlen = u16::from_le_bytes([b[8], b[9]]) as usize;
+    let header = std::str::from_utf8(&b[10..10 + hlen]).unwrap().to_string();
+    let descr = header
+        .split("'descr': '")
+        .nth(1)
+        .unwrap()
+        .split('\'')
+        .next()
+        .unwrap()
+        .to_string();
+    let shape = header
+        .split("'shape': (")
+        .nth(1)
+        .unwrap()
+        .split(')')
+        .next()
+        .unwrap();
+    let dims: Vec<usize> = shape
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(|s| s.trim().parse().unwrap())
+        .collect();
+    (descr, (dims[0], dims[1]), b[10 + hlen..].to_vec())
+}
+
+#[test]
+fn render_default_demo_writes_png_npy_and_json() {
+    let dir = tempdir("render");
+    let o = obscura(
+        &[
+            "render",
+            "--size",
+            "64x48",
+            "--ids",
+            "ids.npy",
+            "--depth",
+            "depth.npy",
+            "--stats",
+            "--stats-json",
+            "s.json",
+            "--threads",
+            "1",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let out = text(&o);
+    assert!(out.contains("wrote obscura.png"), "{out}");
+    assert!(out.contains("faces: back-face culling"), "{out}");
+    let png = std::fs::read(dir.join("obscura.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let (descr, shape, body) = read_npy(&dir.join("ids.npy"));
+    assert_eq!((descr.as_str(), shape), ("<i4", (48, 64)));
+    let ids: Vec<i32> = body
+        .chunks(4)
+        .map(|c| i32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    assert!(ids.contains(&-1) && ids.iter().any(|&i| i >= 0));
+    let (descr, shape, body) = read_npy(&dir.join("depth.npy"));
+    assert_eq!((descr.as_str(), shape), ("<f4", (48, 64)));
+    let depth: Vec<f32> = body
+        .chunks(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    // background exactly where ids are -1
+    for (d, i) in depth.iter().zip(&ids) {
+        assert_eq!(d.is_infinite(), *i == -1);
+    }
+    let json = std::fs::read_to_string(dir.join("s.json")).unwrap();
+    for key in [
+        "\"load_ms\"",
+        "\"render_ms\"",
+        "\"stages\"",
+        "\"threads\": 1",
+        "\"algorithm\": \"zbuffer\"",
+    ] {
+        assert!(json.contains(key), "{key} missing in {json}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn seed_task_renders_at_its_own_size() {
+    let dir = tempdir("seed");
+    let o = obscura(&["render", "demo:seed-task", "--ids", "ids.npy"], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    let (_, shape, _) = read_npy(&dir.join("ids.npy"));
+    assert_eq!(shape, (32, 32));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn absurd_sizes_and_bad_input_get_clear_errors() {
+    let dir = tempdir("errors");
+    let cases: [(&[&str], &str); 7] = [
+        (&["render", "--size", "20000x10"], "at most 16384"),
+        (&["render", "--size", "0x10"], "at least 1 pixel"),
+        (&["render", "--size", "banana"], "WIDTHxHEIGHT"),
+        (&["render", "demo:nope"], "unknown demo scene \"nope\""),
+        (&["render", "missing.obj"], "missing.obj"),
+        (
+            &["render", "--eye", "0,0,0", "--target", "0,0,0"],
+            "the eye is on the target",
+        ),
+        (
+            &["render", "--algo", "magic"],
+            "unknown algorithm \"magic\"",
+        ),
+    ];
+    for (args, expected) in cases {
+        let o = obscura(args, &dir);
+        assert!(!o.status.success(), "{args:?} should fail");
+        let t = text(&o);
+        assert!(
+            t.contains(expected),
+            "{args:?}: expected {expected:?} in {t}"
+        );
+        assert!(!t.contains("panicked"), "{args:?} panicked: {t}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn help_shows_examples() {
+    let dir = tempdir("help");
+    for sub in ["render", "compare", "bench"] {
+        let o = obscura(&[sub, "--help"], &dir);
+        assert!(o.status.success());
+        assert!(
+            text(&o).contains("Examples:"),
+            "{sub} --help has no examples"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn compare_writes_a_grid_and_a_table() {
+    let dir = tempdir("compare");
+    let o = obscura(
+        &[
+            "compare",
+            "demo:cube",
+            "--size",
+            "40x30",
+            "--algos",
+            "zbuffer",
+            "--json",
+            "c.json",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("zbuffer"));
+    assert!(dir.join("compare.png").exists());
+    let json = std::fs::read_to_string(dir.join("c.json")).unwrap();
+    assert!(json.contains("\"differing_pixels\": 0"), "{json}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,570 @@
+//! glTF 2.0 (`.gltf` JSON with external or base64 `data:` buffers, and binary `.glb`),
+//! parsed and validated by the `gltf` crate.
+//!
+//! Input: the bytes of the file (and its directory, for external buffers). Output: one
+//! object per node that has a mesh, in depth-first order of the default scene's node
+//! hierarchy (of every scene's roots, in scene order, when there is no default scene;
+//! of the parentless nodes when there is no scene at all). The object's transform is
+//! the node's world transform: the product of the matrices (or translation, rotation,
+//! scale) from the root down. A mesh used by several nodes is built once and shared.
+//! Up is +y (`Loaded::up`), as the format defines.
+//!
+//! Faces: the triangles of `TRIANGLES`, `TRIANGLE_STRIP` and `TRIANGLE_FAN`
+//! primitives, indexed or not, in primitive order; each triangle is one face. Strip
+//! and fan triangles with a repeated index (the usual way of joining strips) are
+//! skipped without taking an id. `POINTS` and `LINES*` primitives are skipped with a
+//! warning. Colour: the primitive's material `baseColorFactor` (RGB, linear, as obscura
+//! uses); textures are not read.
+//!
+//! Accessors are read here, not by the crate's reader, so that every offset, stride
+//! and count is checked against its buffer view and buffer: a malformed file gives an
+//! error naming the mesh, primitive and accessor instead of a panic. Sparse accessors
+//! and normalized integer positions (`KHR_mesh_quantization`) are supported.
+//!
+//! Errors (naming the file and the element): invalid JSON or GLB container, a missing
+//! or short buffer, an accessor outside its buffer view, a wrong accessor type, a
+//! non-finite position or node transform, an index not below the primitive's vertex
+//! count, a node with two parents or a scene root that has a parent (a cycle).
+//! A node whose world transform is singular (scale 0, used to hide nodes) is skipped
+//! with a warning.
+//!
+//! Complexity: O(file size + nodes). Source: the Khronos glTF 2.0 specification
+//! (sections 3.5 Nodes and hierarchy, 3.6 Binary data storage, 3.7.2 Meshes).
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use ::gltf as gl;
+use gl::accessor::{DataType, Dimensions};
+use gl::mesh::Mode;
+use glam::{DMat4, DQuat, DVec3};
+
+use super::{Loaded, clamp_color, palette_color};
+use crate::scene::{Material, Mesh, MeshBuilder, ObjectDesc};
+use crate::{Error, Result};
+
+/// Most elements an accessor without a buffer view (all zeros but for its sparse
+/// substitutions) may declare.
+pub const MAX_VIEWLESS_COUNT: usize = 1 << 24;
+
+/// Loads a glTF or GLB file from its bytes (`path` names it and locates its buffers).
+pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
+    check_glb_header(path, bytes)?;
+    let gltf = gl::Gltf::from_slice(bytes).map_err(|e| {
+        let element = if bytes.starts_with(b"glTF") {
+            "GLB container"
+        } else {
+            "document"
+        };
+        Error::format(path, element, e.to_string())
+    })?;
+    let doc = &gltf.document;
+    let buffers = load_buffers(path, doc, gltf.blob.clone())?;
+    let mut loaded = Loaded {
+        up: Some(DVec3::Y),
+        ..Loaded::default()
+    };
+
+    let node_count = doc.nodes().len();
+    let mut parent: Vec<Option<usize>> = vec![None; node_count];
+    for node in doc.nodes() {
+        for child in node.children() {
+            if let Some(p) = parent[child.index()] {
+                return Err(Error::format(
+                    path,
+                    format!("node {}", child.index()),
+                    format!(
+                        "is a child of both node {p} and node {} (nodes must form trees)",
+                        node.index()
+                    ),
+                ));
+            }
+            parent[child.index()] = Some(node.index());
+        }
+    }
+    let roots: Vec<gl::Node<'_>> = if let Some(scene) = doc.default_scene() {
+        scene.nodes().collect()
+    } else if doc.scenes().len() > 0 {
+        doc.scenes().flat_map(|s| s.nodes()).collect()
+    } else {
+        doc.nodes()
+            .filter(|n| parent[n.index()].is_none())
+            .collect()
+    };
+    // Every node has at most one parent, so walking down from parentless roots visits
+    // each node once; a root with a parent would be part of a cycle or a subtree.
+    for root in &roots {
+        if let Some(p) = parent[root.index()] {
+            return Err(Error::format(
+                path,
+                format!("node {}", root.index()),
+                format!("is a scene root but also a child of node {p}"),
+            ));
+        }
+    }
+
+    let mut meshes: Vec<Option<Arc<Mesh>>> = vec![None; doc.meshes().len()];
+    let mut colors: Vec<[f32; 3]> = vec![[0.8; 3]; doc.meshes().len()];
+    let mut stack: Vec<(gl::Node<'_>, DMat4)> = Vec::new();
+    for root in roots {
+        stack.push((root, DMat4::IDENTITY));
+        while let Some((node, parent_world)) = stack.pop() {
+            let node_name = node
+                .name()
+                .map_or_else(|| format!("node {}", node.index()), str::to_string);
+            let local = local_transform(&node).map_err(|m| {
+                Error::format(path, format!("node {} ({node_name})", node.index()), m)
+            })?;
+            let world = parent_world * local;
+            if !world.is_finite() {
+                return Err(Error::format(
+                    path,
+                    format!("node {} ({node_name})", node.index()),
+                    "the transform (composed with its parents') is not finite",
+                ));
+            }
+            // Children in file order: push them reversed onto the stack.
+            let children: Vec<_> = node.children().collect();
+            for child in children.into_iter().rev() {
+                stack.push((child, world));
+            }
+            let Some(mesh) = node.mesh() else { continue };
+            let m = mesh.index();
+            if meshes[m].is_none() {
+                let (built, color) = build_mesh(path, &mesh, &buffers, &mut loaded)?;
+                meshes[m] = Some(Arc::new(built));
+                colors[m] = color;
+            }
+            let shared = meshes[m].clone().expect("built above");
+            if shared.face_count() == 0 {
+                continue; // only points or lines
+            }
+            let det = world.determinant();
+            if det == 0.0 || !det.is_finite() {
+                loaded.report.messages.push(format!(
+                    "{}: node {} ({node_name}) has a singular transform (a zero scale): skipped",
+                    path.display(),
+                    node.index()
+                ));
+                continue;
+            }
+            loaded.objects.push(ObjectDesc {
+                name: node_name,
+                mesh: shared,
+                transform: world,
+                color: colors[m],
+                closed: None,
+                convex: None,
+            });
+        }
+    }
+    Ok(loaded)
+}
+
+/// A node's local matrix in `f64`: its `matrix`, or `T R S` from its translation,
+/// rotation (normalised: exporters write quaternions rounded to `f32`) and scale.
+fn local_transform(node: &gl::Node<'_>) -> std::result::Result<DMat4, String> {
+    let m = match node.transform() {
+        gl::scene::Transform::Matrix { matrix } => {
+            DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)))
+        }
+        gl::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => {
+            let q = DQuat::from_array(rotation.map(f64::from));
+            if !(q.length() > 0.0) {
+                return Err(format!("rotation {rotation:?} is not a unit quaternion"));
+            }
+            DMat4::from_scale_rotation_translation(
+                DVec3::from_array(scale.map(f64::from)),
+                q.normalize(),
+                DVec3::from_array(translation.map(f64::from)),
+            )
+        }
+    };
+    if m.is_finite() {
+        Ok(m)
+    } else {
+        Err("the transform is not finite".into())
+    }
+}
+
+/// Refuses GLB headers the `gltf` crate would mishandle (a length below the header's
+/// own size underflows there).
+fn check_glb_header(path: &Path, bytes: &[u8]) -> Result<()> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let word = |i: usize| {
+        bytes
+            .get(i..i + 4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+    };
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Err(Error::format(
+            path,
+            "GLB header",
+            format!("truncated: {} bytes, the header alone has 12", bytes.len()),
+        ));
+    };
+    if version != 2 {
+        return Err(Error::format(
+            path,
+            "GLB header",
+            format!("version {version} is not supported (glTF 2.0 only)"),
+        ));
+    }
+    if (length as usize) < 12 + 8 || length as usize > bytes.len() {
+        return Err(Error::format(
+            path,
+            "GLB header",
+            format!(
+                "truncated or corrupt: the header announces {length} bytes, the file has {}",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Reads every buffer (GLB binary chunk, `data:` URI, or file next to the glTF).
+fn load_buffers(
+    path: &Path,
+    doc: &gl::Document,
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<Vec<u8>>> {
+    let base = path.parent().unwrap_or(Path::new(""));
+    let mut out = Vec::new();
+    for buffer in doc.buffers() {
+        let element = format!("buffer {}", buffer.index());
+        let data = gl::buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob)
+            .map_err(|e| match (e, buffer.source()) {
+            (gl::Error::Io(io), gl::buffer::Source::Uri(uri)) => Error::io(base.join(uri), io),
+            (e, _) => Error::format(path, element.clone(), e.to_string()),
+        })?;
+        if data.0.len() < buffer.length() {
+            return Err(Error::format(
+                path,
+                element,
+                format!(
+                    "truncated: declares {} bytes but holds {}",
+                    buffer.length(),
+                    data.0.len()
+                ),
+            ));
+        }
+        out.push(data.0);
+    }
+    Ok(out)
+}
+
+/// Builds the mesh of a glTF mesh (all its triangle primitives) and its first colour.
+fn build_mesh(
+    path: &Path,
+    mesh: &gl::Mesh<'_>,
+    buffers: &[Vec<u8>],
+    loaded: &mut Loaded,
+) -> Result<(Mesh, [f32; 3])> {
+    let mesh_name = match mesh.name() {
+        Some(n) => format!("mesh {} \"{n}\"", mesh.index()),
+        None => format!("mesh {}", mesh.index()),
+    };
+    let mut b = MeshBuilder::new();
+    let mut materials: HashMap<Option<usize>, u32> = HashMap::new();
+    let mut first_color = None;
+    for prim in mesh.primitives() {
+        let what = format!("{mesh_name} primitive {}", prim.index());
+        let mode = prim.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            loaded.report.messages.push(format!(
+                "{}: {what}: {mode:?} primitive skipped (only triangles are surfaces)",
+                path.display()
+            ));
+            continue;
+        }
+        let Some(pos) = prim.get(&gl::Semantic::Positions) else {
+            return Err(Error::format(path, what, "no POSITION attribute"));
+        };
+        let pos_element = format!("{what} accessor {} (POSITION)", pos.index());
+        if pos.dimensions() != Dimensions::Vec3 {
+            return Err(Error::format(
+                path,
+                pos_element,
+                format!("type {:?}, expected VEC3", pos.dimensions()),
+            ));
+        }
+        let xyz =
+            read_accessor(&pos, 3, buffers).map_err(|m| Error::format(path, &pos_element, m))?;
+        let base = b.vertex_count() as u32;
+        let n = pos.count();
+        for (i, p) in xyz.chunks_exact(3).enumerate() {
+            let p = DVec3::new(p[0], p[1], p[2]);
+            if !p.is_finite() {
+                return Err(Error::format(
+                    path,
+                    pos_element,
+                    format!("vertex {i} is not finite ({:?})", p.to_array()),
+                ));
+            }
+            b.push_position(p);
+        }
+        let (indices, index_element) = match prim.indices() {
+            Some(acc) => {
+                let element = format!("{what} accessor {} (indices)", acc.index());
+                let integer = matches!(
+                    acc.data_type(),
+                    DataType::U8 | DataType::U16 | DataType::U32
+                );
+                if acc.dimensions() != Dimensions::Scalar || !integer || acc.normalized() {
+                    return Err(Error::format(
+                        path,
+                        element,
+                        format!(
+                            "indices must be unsigned integer scalars, found {:?} {:?}",
+                            acc.dimensions(),
+                            acc.data_type()
+                        ),
+                    ));
+                }
+                let values = read_accessor(&acc, 1, buffers)
+                    .map_err(|m| Error::format(path, &element, m))?;
+                (
+                    values.into_iter().map(|v| v as u64).collect::<Vec<u64>>(),
+                    element,
+                )
+            }
+            None => ((0..n as u64).collect(), pos_element.clone()),
+        };
+        if let Some(&bad) = indices.iter().find(|&&i| i >= n as u64) {
+            return Err(Error::format(
+                path,
+                index_element,
+                format!("index {bad} is out of range (the primitive has {n} vertices)"),
+            ));
+        }
+        let material = prim.material();
+        let factor = material.pbr_metallic_roughness().base_color_factor();
+        let color = clamp_color([factor[0], factor[1], factor[2]].map(f64::from));
+        first_color.get_or_insert(color);
+        let mid = *materials.entry(material.index()).or_insert_with(|| {
+            let name = match (material.name(), material.index()) {
+                (Some(n), _) => n.to_string(),
+                (None, Some(i)) => format!("material {i}"),
+                (None, None) => "default".to_string(),
+            };
+            b.push_material(Material { name, color })
+        });
+        let idx = |k: usize| base + indices[k] as u32;
+        let mut push = |t: [u32; 3]| {
+            b.push_face(&t, Some(mid))
+                .map(|_| ())
+                .map_err(|e| Error::format(path, &index_element, e.to_string()))
+        };
+        let len = indices.len();
+        match mode {
+            Mode::Triangles => {
+                if len % 3 != 0 {
+                    return Err(Error::format(
+                        path,
+                        index_element,
+                        format!("{len} indices do not make whole triangles"),
+                    ));
+                }
+                for k in (0..len).step_by(3) {
+                    push([idx(k), idx(k + 1), idx(k + 2)])?;
+                }
+            }
+            Mode::TriangleStrip | Mode::TriangleFan => {
+                for i in 0..len.saturating_sub(2) {
+                    // Orientation per the specification (3.7.2.1): strips alternate.
+                    let t = if mode == Mode::TriangleFan {
+                        [idx(i + 1), idx(i + 2), idx(0)]
+                    } else if i % 2 == 0 {
+                        [idx(i), idx(i + 1), idx(i + 2)]
+                    } else {
+                        [idx(i), idx(i + 2), idx(i + 1)]
+                    };
+                    if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+                        continue; // a joining triangle, not a face
+                    }
+                    push(t)?;
+                }
+            }
+            _ => unreachable!("other modes skipped above"),
+        }
+    }
+    let (built, report) = b.finish();
+    loaded.report.merge(&report);
+    Ok((
+        built,
+        first_color.unwrap_or_else(|| palette_color(mesh.index())),
+    ))
+}
+
+/// Reads an accessor of `components` per element (1 or 3) as `f64`, checking every
+/// range against its buffer view and buffer, applying sparse substitution and integer
+/// normalization.
+fn read_accessor(
+    acc: &gl::Accessor<'_>,
+    components: usize,
+    buffers: &[Vec<u8>],
+) -> std::result::Result<Vec<f64>, String> {
+    let data_type = acc.data_type();
+    let size = data_type.size();
+    let elem = components * size;
+    let count = acc.count();
+    let normalized = acc.normalized();
+    let total = count
+        .checked_mul(components)
+        .filter(|&t| t <= 1 << 31)
+        .ok_or_else(|| format!("count {count} is too large"))?;
+    let mut out = Vec::new();
+    match acc.view() {
+        Some(view) => {
+            let bytes = view_bytes(&view, buffers)?;
+            let stride = view.stride().unwrap_or(elem);
+            if stride < elem {
+                return Err(format!(
+                    "buffer view {} has stride {stride}, smaller than the {elem}-byte element",
+                    view.index()
+                ));
+            }
+            if count > 0 {
+                let need = stride
+                    .checked_mul(count - 1)
+                    .and_then(|s| s.checked_add(elem))
+                    .and_then(|s| s.checked_add(acc.offset()));
+                if need.is_none_or(|need| need > bytes.len()) {
+                    return Err(format!(
+                        "{count} elements from offset {} overrun buffer view {} ({} bytes)",
+                        acc.offset(),
+                        view.index(),
+                        bytes.len()
+                    ));
+                }
+            }
+            out.reserve(total);
+            for i in 0..count {
+                let at = acc.offset() + i * stride;
+                for c in 0..components {
+                    out.push(decode(&bytes[at + c * size..], data_type, normalized));
+                }
+            }
+        }
+        // Without a buffer view the values are zeros (before sparse substitution); no
+        // file size bounds the count then, so a limit does.
+        None => {
+            if count > MAX_VIEWLESS_COUNT {
+                return Err(format!(
+                    "{count} elements without a buffer view (at most {MAX_VIEWLESS_COUNT})"
+                ));
+            }
+            out.resize(total, 0.0);
+        }
+    }
+    if let Some(sparse) = acc.sparse() {
+        let k = sparse.count();
+        let indices = sparse.indices();
+        let index_size = match indices.index_type() {
+            gl::accessor::sparse::IndexType::U8 => 1,
+            gl::accessor::sparse::IndexType::U16 => 2,
+            gl::accessor::sparse::IndexType::U32 => 4,
+        };
+        let index_bytes = view_bytes(&indices.view(), buffers)?;
+        let values = sparse.values();
+        let value_bytes = view_bytes(&values.view(), buffers)?;
+        let fits = |offset: usize, each: usize, len: usize| {
+            k.checked_mul(each)
+                .and_then(|s| s.checked_add(offset))
+                .is_some_and(|end| end <= len)
+        };
+        if !fits(indices.offset(), index_size, index_bytes.len())
+            || !fits(values.offset(), elem, value_bytes.len())
+        {
+            return Err(format!(
+                "sparse: {k} substitutions overrun their buffer views"
+            ));
+        }
+        for s in 0..k {
+            let at = indices.offset() + s * index_size;
+            let target = match index_size {
+                1 => usize::from(index_bytes[at]),
+                2 => usize::from(u16::from_le_bytes([index_bytes[at], index_bytes[at + 1]])),
+                _ => u32::from_le_bytes([
+                    index_bytes[at],
+                    index_bytes[at + 1],
+                    index_bytes[at + 2],
+                    index_bytes[at + 3],
+                ]) as usize,
+            };
+            if target >= count {
+                return Err(format!(
+                    "sparse index {target} is not below the accessor count {count}"
+                ));
+            }
+            for c in 0..components {
+                let at = values.offset() + s * elem + c * size;
+                out[target * components + c] = decode(&value_bytes[at..], data_type, normalized);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The bytes of a buffer view, checked against its buffer.
+fn view_bytes<'b>(
+    view: &gl::buffer::View<'_>,
+    buffers: &'b [Vec<u8>],
+) -> std::result::Result<&'b [u8], String> {
+    let b = view.buffer().index();
+    let buffer = buffers
+        .get(b)
+        .ok_or_else(|| format!("buffer view {} uses missing buffer {b}", view.index()))?;
+    view.offset()
+        .checked_add(view.length())
+        .and_then(|end| buffer.get(view.offset()..end))
+        .ok_or_else(|| {
+            format!(
+                "buffer view {} (bytes {}..+{}) overruns buffer {b} ({} bytes)",
+                view.index(),
+                view.offset(),
+                view.length(),
+                buffer.len()
+            )
+        })
+}
+
+/// One little-endian component as `f64` (normalized integers map to `[-1, 1]` or
+/// `[0, 1]` as the specification says). `bytes` holds at least the component.
+fn decode(bytes: &[u8], data_type: DataType, normalized: bool) -> f64 {
+    match data_type {
+        DataType::I8 => {
+            let v = f64::from(bytes[0] as i8);
+            if normalized { (v / 127.0).max(-1.0) } else { v }
+        }
+        DataType::U8 => {
+            let v = f64::from(bytes[0]);
+            if normalized { v / 255.0 } else { v }
+        }
+        DataType::I16 => {
+            let v = f64::from(i16::from_le_bytes([bytes[0], bytes[1]]));
+            if normalized {
+                (v / 32767.0).max(-1.0)
+            } else {
+                v
+            }
+        }
+        DataType::U16 => {
+            let v = f64::from(u16::from_le_bytes([bytes[0], bytes[1]]));
+            if normalized { v / 65535.0 } else { v }
+        }
+        DataType::U32 => f64::from(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
+        DataType::F32 => f64::from(f32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])),
+    }
+}

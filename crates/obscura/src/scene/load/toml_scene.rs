@@ -1,0 +1,639 @@
+//! obscura scene files (`.toml`): several meshes and built-in primitives placed in one
+//! scene, with an optional camera. The format is documented for users, with a complete
+//! example, in `docs/scene-files.md`.
+//!
+//! Input: the path of a `.toml` file. Output: a [`Scene`] whose objects follow the
+//! `[[object]]` tables in file order (a mesh file holding several objects contributes
+//! them all, in its own order), so face ids follow the file too.
+//!
+//! - `mesh = "path"` (relative to the scene file) loads any mesh format of
+//!   [`super::load_objects`]; a file referenced several times is read once and its
+//!   meshes are shared (`Arc`). Each of its objects is placed with the table's
+//!   transform composed with the object's own (`table * own`).
+//! - `primitive = "box" | "sphere" | "torus" | "cone" | "grid"` uses the generators of
+//!   [`crate::scene::demo`] with the table's parameters.
+//! - Transform: `matrix` (16 numbers, row-major, affine), or `translate`, `rotate`
+//!   (degrees about x, then y, then z, fixed axes: `R = Rz Ry Rx`) and `scale` (a number
+//!   or `[x, y, z]`), composed as `T R S`.
+//!
+//! Errors name `scene.toml:line`: syntax, an unknown key (`deny_unknown_fields`), a
+//! wrong type, a value out of range, a parameter that does not apply, a missing or
+//! unsupported mesh file (the error names that file and the referencing line), an
+//! invalid camera. Errors inside a referenced file name that file and its line or
+//! element, plus the referencing line.
+//!
+//! Complexity: parsing is linear in the file; the cost is that of the referenced
+//! loaders and generators. Source: obscura's own format (TOML 1.0 syntax).
+
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{DMat4, DVec3};
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::{Loaded, extension, line_of_offset, load_objects, palette_color, read_file};
+use crate::scene::{Camera, Mesh, ObjectDesc, Projection, Scene, demo};
+use crate::{Error, Result};
+
+/// Most faces one primitive may generate (a typo in `segments` should not exhaust memory).
+pub const MAX_PRIMITIVE_FACES: u64 = 20_000_000;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    up: Option<Spanned<[f64; 3]>>,
+    camera: Option<Spanned<CameraSpec>>,
+    #[serde(default, rename = "object")]
+    objects: Vec<Spanned<ObjectSpec>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraSpec {
+    eye: [f64; 3],
+    target: [f64; 3],
+    up: Option<[f64; 3]>,
+    fov: Option<f64>,
+    ortho_height: Option<f64>,
+    near: Option<f64>,
+    far: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged, expecting = "a number or an array [x, y, z]")]
+enum Scale {
+    Uniform(f64),
+    Axes([f64; 3]),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectSpec {
+    name: Option<String>,
+    mesh: Option<Spanned<String>>,
+    primitive: Option<Spanned<String>>,
+    // Primitive parameters.
+    size: Option<Spanned<[f64; 3]>>,
+    radius: Option<Spanned<f64>>,
+    height: Option<Spanned<f64>>,
+    major: Option<Spanned<f64>>,
+    minor: Option<Spanned<f64>>,
+    width: Option<Spanned<f64>>,
+    depth: Option<Spanned<f64>>,
+    segments: Option<Spanned<u32>>,
+    rings: Option<Spanned<u32>>,
+    sides: Option<Spanned<u32>>,
+    nx: Option<Spanned<u32>>,
+    nz: Option<Spanned<u32>>,
+    // Appearance and flags.
+    color: Option<Spanned<[f64; 3]>>,
+    closed: Option<bool>,
+    convex: Option<bool>,
+    // Placement.
+    translate: Option<Spanned<[f64; 3]>>,
+    rotate: Option<Spanned<[f64; 3]>>,
+    scale: Option<Spanned<Scale>>,
+    matrix: Option<Spanned<Vec<f64>>>,
+}
+
+/// The primitives and the parameters each accepts.
+const PRIMITIVES: [(&str, &[&str]); 5] = [
+    ("box", &["size"]),
+    ("sphere", &["radius", "segments", "rings"]),
+    ("torus", &["major", "minor", "segments", "sides"]),
+    ("cone", &["radius", "height", "segments"]),
+    ("grid", &["width", "depth", "nx", "nz"]),
+];
+
+/// Reads a scene file.
+pub fn load(path: &Path) -> Result<Scene> {
+    let bytes = read_file(path)?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let line = line_of_offset(
+            &String::from_utf8_lossy(e.as_bytes()),
+            e.utf8_error().valid_up_to(),
+        );
+        Error::parse(path, line, "not valid UTF-8 (TOML files are UTF-8)")
+    })?;
+    let file: SceneFile = toml::from_str(&text).map_err(|e| {
+        let line = e.span().map_or(1, |s| line_of_offset(&text, s.start));
+        Error::parse(path, line, e.message().trim().to_string())
+    })?;
+    SceneReader {
+        path,
+        text: &text,
+        dir: path.parent().unwrap_or(Path::new("")).to_path_buf(),
+        cache: HashMap::new(),
+    }
+    .read(file)
+}
+
+/// A mesh file read once (its report goes to the scene on that first read).
+struct CachedFile {
+    objects: Vec<ObjectDesc>,
+    up: Option<DVec3>,
+}
+
+struct SceneReader<'a> {
+    path: &'a Path,
+    text: &'a str,
+    dir: PathBuf,
+    cache: HashMap<PathBuf, Arc<CachedFile>>,
+}
+
+impl SceneReader<'_> {
+    fn line(&self, span: &Range<usize>) -> usize {
+        line_of_offset(self.text, span.start)
+    }
+
+    fn error(&self, span: &Range<usize>, message: impl Into<String>) -> Error {
+        Error::parse(self.path, self.line(span), message)
+    }
+
+    fn read(mut self, file: SceneFile) -> Result<Scene> {
+        let mut scene = Scene::new();
+        let mut file_up = None;
+        for (k, spec) in file.objects.iter().enumerate() {
+            let span = spec.span();
+            let descs = self.objects_of(spec.get_ref(), &span, k, &mut scene, &mut file_up)?;
+            for d in descs {
+                let name = d.name.clone();
+                scene.add(d).map_err(|e| {
+                    self.error(&span, format!("object \"{name}\" cannot be placed: {e}"))
+                })?;
+            }
+        }
+        let up = match &file.up {
+            Some(up) => Some(self.direction(up.get_ref(), &up.span(), "up")?),
+            None => file_up,
+        };
+        if let Some(up) = up {
+            scene.set_up(up);
+        }
+        scene.ensure_not_empty(&self.path.display().to_string())?;
+        if let Some(cam) = &file.camera {
+            let camera = self.camera(cam.get_ref(), &cam.span(), &scene)?;
+            scene.set_camera(Some(camera));
+        }
+        Ok(scene)
+    }
+
+    /// The objects one `[[object]]` table places.
+    fn objects_of(
+        &mut self,
+        spec: &ObjectSpec,
+        span: &Range<usize>,
+        k: usize,
+        scene: &mut Scene,
+        file_up: &mut Option<DVec3>,
+    ) -> Result<Vec<ObjectDesc>> {
+        let transform = self.transform(spec, span)?;
+        let color = match &spec.color {
+            Some(c) => {
+                let v = c.get_ref();
+                if !v.iter().all(|x| (0.0..=1.0).contains(x)) {
+                    return Err(self.error(
+                        &c.span(),
+                        format!("color {v:?}: components must be in 0..=1"),
+                    ));
+                }
+                Some(v.map(|x| x as f32))
+            }
+            None => None,
+        };
+        let mut placed = match (&spec.mesh, &spec.primitive) {
+            (Some(_), Some(p)) => {
+                return Err(self.error(&p.span(), "give either `mesh` or `primitive`, not both"));
+            }
+            (None, None) => {
+                return Err(self.error(
+                    span,
+                    "this object has neither `mesh = \"file\"` nor `primitive = \"...\"`",
+                ));
+            }
+            (Some(mesh), None) => {
+                if let Some((param, s)) = self.parameters(spec).into_iter().next() {
+                    return Err(self.error(
+                        &s,
+                        format!(
+                            "`{param}` is a primitive parameter; it does not apply to a mesh file"
+                        ),
+                    ));
+                }
+                let file = self.mesh_file(mesh, scene)?;
+                if file_up.is_none() {
+                    *file_up = file.up;
+                }
+                let base = spec.name.clone().unwrap_or_else(|| {
+                    Path::new(mesh.get_ref()).file_stem().map_or_else(
+                        || format!("object {k}"),
+                        |s| s.to_string_lossy().into_owned(),
+                    )
+                });
+                let several = file.objects.len() > 1;
+                file.objects
+                    .iter()
+                    .map(|o| ObjectDesc {
+                        name: if several {
+                            format!("{base}/{}", o.name)
+                        } else {
+                            base.clone()
+                        },
+                        mesh: o.mesh.clone(),
+                        transform: transform * o.transform,
+                        color: o.color,
+                        closed: o.closed,
+                        convex: o.convex,
+                    })
+                    .collect()
+            }
+            (None, Some(kind)) => {
+                let mesh = self.primitive(spec, kind)?;
+                let name = spec
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| format!("{} {k}", kind.get_ref()));
+                vec![ObjectDesc {
+                    name,
+                    mesh: Arc::new(mesh),
+                    transform,
+                    color: palette_color(k),
+                    closed: None,
+                    convex: None,
+                }]
+            }
+        };
+        for d in &mut placed {
+            if let Some(c) = color {
+                d.color = c;
+            }
+            if spec.closed.is_some() {
+                d.closed = spec.closed;
+            }
+            if spec.convex.is_some() {
+                d.convex = spec.convex;
+            }
+        }
+        Ok(placed)
+    }
+
+    /// Loads (once) the mesh file a table references.
+    fn mesh_file(&mut self, mesh: &Spanned<String>, scene: &mut Scene) -> Result<Arc<CachedFile>> {
+        let span = mesh.span();
+        let rel = Path::new(mesh.get_ref());
+        let full = self.dir.join(rel);
+        match extension(&full).as_deref() {
+            Some("toml") => {
+                return Err(self.error(
+                    &span,
+                    format!(
+                        "\"{}\": a scene file cannot include another scene file",
+                        rel.display()
+                    ),
+                ));
+            }
+            Some(e) if super::MESH_EXTENSIONS.contains(&e) => {}
+            _ => {
+                return Err(self.error(
+                    &span,
+                    format!(
+                        "\"{}\": unsupported mesh file type (expected .obj, .gltf, .glb, .stl or .ply)",
+                        rel.display()
+                    ),
+                ));
+            }
+        }
+        let key = std::fs::canonicalize(&full).unwrap_or_else(|_| full.clone());
+        if let Some(file) = self.cache.get(&key) {
+            return Ok(file.clone());
+        }
+        let reference = format!(
+            "referenced from {}:{}",
+            self.path.display(),
+            self.line(&span)
+        );
+        let Loaded {
+            objects,
+            report,
+            up,
+        } = load_objects(&full).map_err(|e| with_reference(e, &reference))?;
+        scene.report_mut().merge(&report);
+        if objects.iter().all(|o| o.mesh.polygon_count() == 0) {
+            scene
+                .report_mut()
+                .messages
+                .push(format!("{}: no usable face ({reference})", full.display()));
+        }
+        let file = Arc::new(CachedFile { objects, up });
+        self.cache.insert(key, file.clone());
+        Ok(file)
+    }
+
+    /// The primitive parameters given in a table, with their spans.
+    fn parameters(&self, s: &ObjectSpec) -> Vec<(&'static str, Range<usize>)> {
+        let mut out = Vec::new();
+        let mut add = |name: &'static str, span: Option<Range<usize>>| {
+            if let Some(span) = span {
+                out.push((name, span));
+            }
+        };
+        add("size", s.size.as_ref().map(Spanned::span));
+        add("radius", s.radius.as_ref().map(Spanned::span));
+        add("height", s.height.as_ref().map(Spanned::span));
+        add("major", s.major.as_ref().map(Spanned::span));
+        add("minor", s.minor.as_ref().map(Spanned::span));
+        add("width", s.width.as_ref().map(Spanned::span));
+        add("depth", s.depth.as_ref().map(Spanned::span));
+        add("segments", s.segments.as_ref().map(Spanned::span));
+        add("rings", s.rings.as_ref().map(Spanned::span));
+        add("sides", s.sides.as_ref().map(Spanned::span));
+        add("nx", s.nx.as_ref().map(Spanned::span));
+        add("nz", s.nz.as_ref().map(Spanned::span));
+        out
+    }
+
+    fn primitive(&self, s: &ObjectSpec, kind: &Spanned<String>) -> Result<Mesh> {
+        let name = kind.get_ref().as_str();
+        let Some(&(_, accepted)) = PRIMITIVES.iter().find(|(n, _)| *n == name) else {
+            let known: Vec<&str> = PRIMITIVES.iter().map(|(n, _)| *n).collect();
+            return Err(self.error(
+                &kind.span(),
+                format!("unknown primitive \"{name}\" (known: {})", known.join(", ")),
+            ));
+        };
+        for (param, span) in self.parameters(s) {
+            if !accepted.contains(&param) {
+                return Err(self.error(
+                    &span,
+                    format!(
+                        "`{param}` does not apply to a {name} (it takes: {})",
+                        accepted.join(", ")
+                    ),
+                ));
+            }
+        }
+        let length = |v: &Option<Spanned<f64>>, default: f64, what: &str| -> Result<f64> {
+            match v {
+                None => Ok(default),
+                Some(v) if v.get_ref().is_finite() && *v.get_ref() > 0.0 => Ok(*v.get_ref()),
+                Some(v) => Err(self.error(
+                    &v.span(),
+                    format!("{what} = {} must be a positive finite number", v.get_ref()),
+                )),
+            }
+        };
+        let count = |v: &Option<Spanned<u32>>, default: u32, min: u32, what: &str| -> Result<u32> {
+            match v {
+                None => Ok(default),
+                Some(v) if *v.get_ref() >= min => Ok(*v.get_ref()),
+                Some(v) => Err(self.error(
+                    &v.span(),
+                    format!("{what} = {} must be at least {min}", v.get_ref()),
+                )),
+            }
+        };
+        let too_many = |faces: u64| -> Result<()> {
+            if faces > MAX_PRIMITIVE_FACES {
+                Err(self.error(
+                    &kind.span(),
+                    format!("this {name} would have {faces} faces (at most {MAX_PRIMITIVE_FACES})"),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        Ok(match name {
+            "box" => {
+                let size = match &s.size {
+                    None => DVec3::ONE,
+                    Some(v) if v.get_ref().iter().all(|x| x.is_finite() && *x > 0.0) => {
+                        DVec3::from_array(*v.get_ref())
+                    }
+                    Some(v) => {
+                        return Err(self.error(
+                            &v.span(),
+                            format!(
+                                "size {:?} must be three positive finite numbers",
+                                v.get_ref()
+                            ),
+                        ));
+                    }
+                };
+                demo::box_mesh(-size * 0.5, size * 0.5)
+            }
+            "sphere" => {
+                let radius = length(&s.radius, 1.0, "radius")?;
+                let segments = count(&s.segments, 32, 3, "segments")?;
+                let rings = count(&s.rings, 16, 2, "rings")?;
+                too_many(2 * u64::from(segments) * u64::from(rings))?;
+                demo::uv_sphere_mesh(radius, segments, rings)
+            }
+            "torus" => {
+                let major = length(&s.major, 1.0, "major")?;
+                let minor = length(&s.minor, 0.25, "minor")?;
+                let segments = count(&s.segments, 48, 3, "segments")?;
+                let sides = count(&s.sides, 16, 3, "sides")?;
+                too_many(u64::from(segments) * u64::from(sides))?;
+                demo::torus_mesh(major, minor, segments, sides)
+            }
+            "cone" => {
+                let radius = length(&s.radius, 1.0, "radius")?;
+                let height = length(&s.height, 2.0, "height")?;
+                let segments = count(&s.segments, 32, 3, "segments")?;
+                too_many(u64::from(segments) + 1)?;
+                demo::cone_mesh(radius, height, segments)
+            }
+            _ => {
+                let width = length(&s.width, 1.0, "width")?;
+                let depth = length(&s.depth, 1.0, "depth")?;
+                let nx = count(&s.nx, 1, 1, "nx")?;
+                let nz = count(&s.nz, 1, 1, "nz")?;
+                too_many(u64::from(nx) * u64::from(nz))?;
+                demo::grid_mesh(width, depth, nx, nz)
+            }
+        })
+    }
+
+    /// The table's object-to-world transform (`matrix`, or `T R S`).
+    fn transform(&self, s: &ObjectSpec, span: &Range<usize>) -> Result<DMat4> {
+        let finite3 = |v: &Spanned<[f64; 3]>, what: &str| -> Result<DVec3> {
+            let a = *v.get_ref();
+            if a.iter().all(|x| x.is_finite()) {
+                Ok(DVec3::from_array(a))
+            } else {
+                Err(self.error(&v.span(), format!("{what} {a:?} must be finite")))
+            }
+        };
+        let m = if let Some(matrix) = &s.matrix {
+            if s.translate.is_some() || s.rotate.is_some() || s.scale.is_some() {
+                return Err(self.error(
+                    &matrix.span(),
+                    "give either `matrix` or `translate`/`rotate`/`scale`, not both",
+                ));
+            }
+            let v = matrix.get_ref();
+            if v.len() != 16 || !v.iter().all(|x| x.is_finite()) {
+                return Err(self.error(
+                    &matrix.span(),
+                    format!(
+                        "matrix needs 16 finite numbers (row-major 4x4), found {}",
+                        v.len()
+                    ),
+                ));
+            }
+            if v[12..16] != [0.0, 0.0, 0.0, 1.0] {
+                return Err(self.error(
+                    &matrix.span(),
+                    format!(
+                        "matrix must be affine: its last row is {:?}, expected [0, 0, 0, 1]",
+                        &v[12..16]
+                    ),
+                ));
+            }
+            // Row-major in the file, column-major in glam: transpose.
+            DMat4::from_cols_slice(v).transpose()
+        } else {
+            let t = match &s.translate {
+                Some(v) => finite3(v, "translate")?,
+                None => DVec3::ZERO,
+            };
+            let r = match &s.rotate {
+                Some(v) => finite3(v, "rotate")?,
+                None => DVec3::ZERO,
+            };
+            let scale = match &s.scale {
+                None => DVec3::ONE,
+                Some(v) => {
+                    let sv = match v.get_ref() {
+                        Scale::Uniform(u) => DVec3::splat(*u),
+                        Scale::Axes(a) => DVec3::from_array(*a),
+                    };
+                    if !sv.is_finite() || sv.x == 0.0 || sv.y == 0.0 || sv.z == 0.0 {
+                        return Err(self.error(
+                            &v.span(),
+                            format!(
+                                "scale {:?} must be finite and non-zero (a zero scale flattens the object)",
+                                sv.to_array()
+                            ),
+                        ));
+                    }
+                    sv
+                }
+            };
+            DMat4::from_translation(t)
+                * DMat4::from_rotation_z(r.z.to_radians())
+                * DMat4::from_rotation_y(r.y.to_radians())
+                * DMat4::from_rotation_x(r.x.to_radians())
+                * DMat4::from_scale(scale)
+        };
+        let det = m.determinant();
+        if !(det.is_finite() && det != 0.0) {
+            let at = s.matrix.as_ref().map_or(span.clone(), Spanned::span);
+            return Err(self.error(&at, "the transform is singular (it flattens the object)"));
+        }
+        Ok(m)
+    }
+
+    fn direction(&self, v: &[f64; 3], span: &Range<usize>, what: &str) -> Result<DVec3> {
+        let d = DVec3::from_array(*v);
+        if d.is_finite() && d.length() > 0.0 {
+            Ok(d)
+        } else {
+            Err(self.error(
+                span,
+                format!("{what} {v:?} must be a finite non-zero vector"),
+            ))
+        }
+    }
+
+    /// The `[camera]` table as a checked camera; near and far default to the range
+    /// that holds the scene's box along the view axis.
+    fn camera(&self, c: &CameraSpec, span: &Range<usize>, scene: &Scene) -> Result<Camera> {
+        let projection = match (c.fov, c.ortho_height) {
+            (Some(_), Some(_)) => {
+                return Err(self.error(span, "give either `fov` or `ortho_height`, not both"));
+            }
+            (_, Some(height)) => Projection::Orthographic { height },
+            (fov, None) => Projection::Perspective {
+                fov_y_degrees: fov.unwrap_or(45.0),
+            },
+        };
+        let eye = DVec3::from_array(c.eye);
+        let target = DVec3::from_array(c.target);
+        let up = c.up.map_or(scene.up(), DVec3::from_array);
+        let mut camera = Camera {
+            eye,
+            target,
+            up,
+            projection,
+            near: 1.0,
+            far: 2.0,
+        };
+        if eye.is_finite() && target.is_finite() && eye != target {
+            let (near, far) = fit_depth_range(scene, &camera);
+            camera.near = near;
+            camera.far = far;
+        }
+        if let Some(n) = c.near {
+            camera.near = n;
+        }
+        if let Some(f) = c.far {
+            camera.far = f;
+        }
+        camera
+            .validate()
+            .map_err(|e| self.error(span, format!("[camera]: {e}")))?;
+        Ok(camera)
+    }
+}
+
+/// Near and far distances holding the scene's box along the camera's axis.
+fn fit_depth_range(scene: &Scene, cam: &Camera) -> (f64, f64) {
+    let forward = (cam.target - cam.eye).normalize();
+    let b = scene.bounds();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for c in b.corners() {
+        let d = (c - cam.eye).dot(forward);
+        lo = lo.min(d);
+        hi = hi.max(d);
+    }
+    let size = b.extent().length().max(1e-9);
+    let far = hi.max(size * 1e-3) * 1.01 + size * 1e-6;
+    match cam.projection {
+        Projection::Perspective { .. } => ((lo * 0.99).max(far * 1e-4), far),
+        Projection::Orthographic { .. } => (lo - size * 0.01, far),
+    }
+}
+
+/// Adds "referenced from scene.toml:N" to an error from a referenced file, keeping the
+/// referenced file's own name and line.
+fn with_reference(e: Error, reference: &str) -> Error {
+    match e {
+        Error::Io { path, source } => Error::Io {
+            path,
+            source: std::io::Error::new(source.kind(), format!("{source} ({reference})")),
+        },
+        Error::Parse {
+            path,
+            line,
+            message,
+        } => Error::Parse {
+            path,
+            line,
+            message: format!("{message} ({reference})"),
+        },
+        Error::Format {
+            path,
+            element,
+            message,
+        } => Error::Format {
+            path,
+            element,
+            message: format!("{message} ({reference})"),
+        },
+        other => other,
+    }
+}
