@@ -627,7 +627,7 @@ fn stats_report_the_figures_of_each_variant() {
         "leaves",
         "depth",
         "triangle_tests_per_ray",
-        "box_tests_per_ray",
+        "node_visits_per_ray",
     ] {
         assert!(bvh.get(key).is_some(), "bvh: no {key}");
     }
