@@ -245,8 +245,28 @@ impl PrimaryRays {
     #[inline]
     #[must_use]
     pub fn ray(&self, px: f64, py: f64) -> (DVec3, DVec3) {
-        let sx = (2.0 * px / self.width - 1.0) * self.half_width;
-        let sy = (1.0 - 2.0 * py / self.height) * self.half_height;
+        self.ray_at(self.window_x(px), self.window_y(py))
+    }
+
+    /// The window coordinate of image column `px` (`sx` of [`Camera::ray`]), so a
+    /// caller can compute it once per column.
+    #[inline]
+    #[must_use]
+    pub fn window_x(&self, px: f64) -> f64 {
+        (2.0 * px / self.width - 1.0) * self.half_width
+    }
+
+    /// The window coordinate of image row `py` (`sy` of [`Camera::ray`]).
+    #[inline]
+    #[must_use]
+    pub fn window_y(&self, py: f64) -> f64 {
+        (1.0 - 2.0 * py / self.height) * self.half_height
+    }
+
+    /// The ray through window point `(sx, sy)` (see [`PrimaryRays::window_x`]).
+    #[inline]
+    #[must_use]
+    pub fn ray_at(&self, sx: f64, sy: f64) -> (DVec3, DVec3) {
         if self.orthographic {
             (self.eye + self.right * sx + self.up * sy, self.forward)
         } else {
@@ -443,7 +463,8 @@ impl WatertightRay {
         let u = cx * by - cy * bx;
         let v = ax * cy - ay * cx;
         let w = bx * ay - by * ax;
-        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        // Non-short-circuit `|` and `&`: one unpredictable branch instead of six.
+        if ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0)) {
             return None;
         }
         let det = u + v + w;

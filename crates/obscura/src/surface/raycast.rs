@@ -321,9 +321,9 @@ pub fn render_bounds(
         .collect();
     let build_ms = ms_since(build);
     let start = Instant::now();
-    let (frame, counters) = setup.cast_rows(options, |row, counters| {
+    let (frame, counters) = setup.cast_bands(options, |band, counters| {
         let mut candidates: Vec<(f64, u32)> = Vec::with_capacity(bounds.len());
-        setup.cast_row(row, counters, |ctx, counters| {
+        setup.cast_band(band, counters, |ctx, counters| {
             ctx.ray.dispatch(Run {
                 ctx,
                 triangles,
@@ -367,9 +367,9 @@ pub fn render_bvh(
 ) -> Result<(Frame, Stats)> {
     let setup = Setup::new(view, triangles);
     let start = Instant::now();
-    let (frame, counters) = setup.cast_rows(options, |row, counters| {
+    let (frame, counters) = setup.cast_bands(options, |band, counters| {
         let mut stack = TraversalStack::default();
-        setup.cast_row(row, counters, |ctx, counters| {
+        setup.cast_band(band, counters, |ctx, counters| {
             let mut c = TraceCounters::default();
             let hit = bvh.closest_hit(ctx, setup.rays.far, &mut stack, &mut c);
             counters.bound_tests += c.nodes;
@@ -443,9 +443,15 @@ pub fn render_grid(
     Ok((frame, stats))
 }
 
+/// Pixels are traced in square tiles of this side (bands of this many rows are the
+/// unit of parallel work).
+const TILE: usize = 8;
+
 /// What every variant shares for one view: rays, ignored polygons, face ids.
 struct Setup<'a> {
     rays: PrimaryRays,
+    /// The window coordinate of each column's centre.
+    window_x: Vec<f64>,
     ignored: Vec<bool>,
     faces: &'a [u32],
     width: usize,
@@ -472,8 +478,12 @@ impl<'a> Setup<'a> {
             b.min.abs().max(b.max.abs()).max_element() + b.extent().max_element()
         };
         let vp = view.viewport();
+        let rays = PrimaryRays::new(camera, vp);
         Setup {
-            rays: PrimaryRays::new(camera, vp),
+            window_x: (0..vp.width)
+                .map(|i| rays.window_x(f64::from(i) + 0.5))
+                .collect(),
+            rays,
             ignored,
             faces: triangles.polygon_faces(),
             width: vp.width as usize,
@@ -490,61 +500,71 @@ impl<'a> Setup<'a> {
     where
         F: Fn(&HitContext<'_>, &mut RayCounters) -> ClosestHit + Sync,
     {
-        self.cast_rows(options, |row, counters| {
-            self.cast_row(row, counters, &trace);
+        self.cast_bands(options, |band, counters| {
+            self.cast_band(band, counters, &trace);
         })
     }
 
-    /// Fills one row: `row = (j, ids, depth)`.
-    fn cast_row<F>(
+    /// Fills one band of rows, tile by tile: `band = (first row, ids, depth)`.
+    /// Tiles of [`TILE`] x [`TILE`] pixels keep consecutive rays close in both
+    /// directions, so the nodes and triangles they visit stay in the cache.
+    fn cast_band<F>(
         &self,
-        row: (usize, &mut [u32], &mut [f32]),
+        band: (usize, &mut [u32], &mut [f32]),
         counters: &mut RayCounters,
         mut trace: F,
     ) where
         F: FnMut(&HitContext<'_>, &mut RayCounters) -> ClosestHit,
     {
-        let (j, ids, depth) = row;
-        let py = j as f64 + 0.5;
+        let (j0, ids, depth) = band;
+        let w = self.width;
+        let rows = ids.len() / w.max(1);
         let tie = self.rays.tie_rule();
-        for i in 0..self.width {
-            let (origin, direction) = self.rays.ray(i as f64 + 0.5, py);
-            counters.rays += 1;
-            let Some(ray) = WatertightRay::new(origin, direction) else {
-                continue;
-            };
-            let ctx = HitContext {
-                ray,
-                ignored: &self.ignored,
-                faces: self.faces,
-                t_min: self.rays.near,
-                tie,
-            };
-            let hit = trace(&ctx, counters);
-            if hit.is_hit() {
-                counters.hits += 1;
-                ids[i] = hit.face;
-                depth[i] = hit.t as f32;
+        for x0 in (0..w).step_by(TILE) {
+            let x1 = (x0 + TILE).min(w);
+            for r in 0..rows {
+                let sy = self.rays.window_y((j0 + r) as f64 + 0.5);
+                for i in x0..x1 {
+                    let (origin, direction) = self.rays.ray_at(self.window_x[i], sy);
+                    counters.rays += 1;
+                    let Some(ray) = WatertightRay::new(origin, direction) else {
+                        continue;
+                    };
+                    let ctx = HitContext {
+                        ray,
+                        ignored: &self.ignored,
+                        faces: self.faces,
+                        t_min: self.rays.near,
+                        tie,
+                    };
+                    let hit = trace(&ctx, counters);
+                    if hit.is_hit() {
+                        counters.hits += 1;
+                        ids[r * w + i] = hit.face;
+                        depth[r * w + i] = hit.t as f32;
+                    }
+                }
             }
         }
     }
 
-    /// Runs `row` on every row of a new frame, in parallel when the `parallel` feature
-    /// is on, summing the counters.
-    fn cast_rows<F>(&self, options: &RenderOptions, row: F) -> Result<(Frame, RayCounters)>
+    /// Runs `band` on every band of [`TILE`] rows of a new frame, in parallel when the
+    /// `parallel` feature is on, summing the counters.
+    fn cast_bands<F>(&self, options: &RenderOptions, band: F) -> Result<(Frame, RayCounters)>
     where
         F: Fn((usize, &mut [u32], &mut [f32]), &mut RayCounters) + Sync,
     {
         let mut frame = Frame::new(self.viewport)?;
         let (w, h) = (self.width, self.height);
+        let bands = h.div_ceil(TILE);
         let done = std::sync::atomic::AtomicUsize::new(0);
-        let step = (h / 50).max(1);
-        let one = |j: usize, ids: &mut [u32], depth: &mut [f32]| {
+        let step = (bands / 50).max(1);
+        let one = |b: usize, ids: &mut [u32], depth: &mut [f32]| {
             let mut c = RayCounters::default();
-            row((j, ids, depth), &mut c);
+            band((b * TILE, ids, depth), &mut c);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             if n.is_multiple_of(step) {
-                options.report(n as f64 / h as f64);
+                options.report(n as f64 / bands as f64);
             }
             c
         };
@@ -553,10 +573,10 @@ impl<'a> Setup<'a> {
             use rayon::prelude::*;
             frame
                 .ids
-                .par_chunks_mut(w)
-                .zip(frame.depth.par_chunks_mut(w))
+                .par_chunks_mut(w * TILE)
+                .zip(frame.depth.par_chunks_mut(w * TILE))
                 .enumerate()
-                .map(|(j, (ids, depth))| one(j, ids, depth))
+                .map(|(b, (ids, depth))| one(b, ids, depth))
                 .reduce(RayCounters::default, |mut a, b| {
                     a += b;
                     a
@@ -565,13 +585,13 @@ impl<'a> Setup<'a> {
         #[cfg(not(feature = "parallel"))]
         let counters = {
             let mut total = RayCounters::default();
-            for (j, (ids, depth)) in frame
+            for (b, (ids, depth)) in frame
                 .ids
-                .chunks_mut(w)
-                .zip(frame.depth.chunks_mut(w))
+                .chunks_mut(w * TILE)
+                .zip(frame.depth.chunks_mut(w * TILE))
                 .enumerate()
             {
-                total += one(j, ids, depth);
+                total += one(b, ids, depth);
             }
             total
         };

@@ -33,11 +33,7 @@ impl BinaryNode {
     }
 
     pub fn half_area(&self) -> f64 {
-        Box3 {
-            min: self.min,
-            max: self.max,
-        }
-        .half_area()
+        Box3::new(self.min, self.max).half_area()
     }
 }
 
@@ -58,24 +54,40 @@ pub(crate) const MAX_BINS: usize = 64;
 /// Below this depth splits are SAH; at and beyond it, median splits.
 pub(crate) const MEDIAN_DEPTH: usize = 56;
 
-/// A single-precision box under construction.
+/// A single-precision box under construction. Four lanes, the last always 0, so that
+/// growing one box by another is one vector min and one max.
 #[derive(Clone, Copy, Debug)]
 struct Box3 {
-    min: [f32; 3],
-    max: [f32; 3],
+    min: [f32; 4],
+    max: [f32; 4],
 }
 
 impl Box3 {
     const EMPTY: Box3 = Box3 {
-        min: [f32::INFINITY; 3],
-        max: [f32::NEG_INFINITY; 3],
+        min: [f32::INFINITY, f32::INFINITY, f32::INFINITY, 0.0],
+        max: [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY, 0.0],
     };
+
+    fn new(min: [f32; 3], max: [f32; 3]) -> Self {
+        Box3 {
+            min: [min[0], min[1], min[2], 0.0],
+            max: [max[0], max[1], max[2], 0.0],
+        }
+    }
+
+    fn min3(&self) -> [f32; 3] {
+        [self.min[0], self.min[1], self.min[2]]
+    }
+
+    fn max3(&self) -> [f32; 3] {
+        [self.max[0], self.max[1], self.max[2]]
+    }
 
     // Plain comparisons instead of `f32::min`: the inputs are never NaN, and this
     // compiles to single min/max instructions in the binning loop.
     #[inline(always)]
     fn grow(&mut self, o: &Box3) {
-        for k in 0..3 {
+        for k in 0..4 {
             self.min[k] = if o.min[k] < self.min[k] {
                 o.min[k]
             } else {
@@ -89,8 +101,9 @@ impl Box3 {
         }
     }
 
+    /// Grows by a point given in four lanes (the last 0).
     #[inline(always)]
-    fn grow_point(&mut self, p: &[f32; 3]) {
+    fn grow_point(&mut self, p: &[f32; 4]) {
         for (k, &x) in p.iter().enumerate() {
             self.min[k] = if x < self.min[k] { x } else { self.min[k] };
             self.max[k] = if x > self.max[k] { x } else { self.max[k] };
@@ -115,7 +128,8 @@ impl Box3 {
 #[derive(Clone, Copy, Debug)]
 struct Prim {
     bounds: Box3,
-    centroid: [f32; 3],
+    /// Centre of the box; the fourth lane is 0.
+    centroid: [f32; 4],
     index: u32,
 }
 
@@ -158,11 +172,11 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> BinaryT
         scale = scale
             .max(lo.abs().max_element())
             .max(hi.abs().max_element());
-        let b = Box3 {
-            min: [f32_down(lo.x), f32_down(lo.y), f32_down(lo.z)],
-            max: [f32_up(hi.x), f32_up(hi.y), f32_up(hi.z)],
-        };
-        let c: [f32; 3] = std::array::from_fn(|k| (b.min[k] + b.max[k]) * 0.5);
+        let b = Box3::new(
+            [f32_down(lo.x), f32_down(lo.y), f32_down(lo.z)],
+            [f32_up(hi.x), f32_up(hi.y), f32_up(hi.z)],
+        );
+        let c: [f32; 4] = std::array::from_fn(|k| (b.min[k] + b.max[k]) * 0.5);
         root_bounds.grow(&b);
         root_centroids.grow_point(&c);
         prims.push(Prim {
@@ -219,8 +233,8 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> BinaryT
         };
         let left = nodes.len() as u32;
         let node = &mut nodes[task.node as usize];
-        node.min = task.bounds.min;
-        node.max = task.bounds.max;
+        node.min = task.bounds.min3();
+        node.max = task.bounds.max3();
         let Some(split_at) = split else {
             node.first = task.start as u32;
             node.count = count as u32;
@@ -271,7 +285,8 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> BinaryT
 
 #[inline(always)]
 fn bin_of(c: f32, lo: f32, scale: f32, bins: usize) -> usize {
-    (((c - lo) * scale) as usize).min(bins - 1)
+    // Through i32: a float to 64-bit unsigned conversion is many instructions on x86.
+    (((c - lo) * scale) as i32).clamp(0, bins as i32 - 1) as usize
 }
 
 /// The best SAH plane of a range.

@@ -64,11 +64,19 @@ impl Default for TraversalStack {
 const MARGIN: f64 = 1.0 / 131_072.0;
 
 /// A ray prepared for the single-precision slab test.
+///
+/// Per axis, which of a box's planes the ray meets first is fixed by the sign of its
+/// direction, so the planes are picked once per ray (`swap`) and the test needs no
+/// per-box min/max of the two slab distances.
 #[derive(Clone, Copy, Debug)]
 pub struct BoxRay {
-    lower_origin: [f32; 3],
-    upper_origin: [f32; 3],
+    /// Origin shifted for the entry planes (`o + δ` for lower planes, `o - δ` for upper).
+    near_origin: [f32; 3],
+    /// Origin shifted for the exit planes.
+    far_origin: [f32; 3],
     inv: [f32; 3],
+    /// Whether the ray goes down this axis (enters through the upper plane).
+    swap: [bool; 3],
 }
 
 #[inline(always)]
@@ -86,11 +94,17 @@ impl BoxRay {
     #[must_use]
     pub fn new(origin: DVec3, direction: DVec3, scale: f64) -> Self {
         let delta = (origin.abs().max_element() + scale) * MARGIN;
-        let inv = |d: f64| (1.0 / d).clamp(-1e30, 1e30) as f32;
+        let lower = (origin + delta).to_array().map(|x| x as f32);
+        let upper = (origin - delta).to_array().map(|x| x as f32);
+        let d = direction.to_array();
+        // 1 / ±0 gives ±inf: clamped, it keeps the sign that picks the planes.
+        let inv = d.map(|d| (1.0 / d).clamp(-1e30, 1e30) as f32);
+        let swap = inv.map(|i| i < 0.0);
         BoxRay {
-            lower_origin: (origin + delta).to_array().map(|x| x as f32),
-            upper_origin: (origin - delta).to_array().map(|x| x as f32),
-            inv: [inv(direction.x), inv(direction.y), inv(direction.z)],
+            near_origin: std::array::from_fn(|k| if swap[k] { upper[k] } else { lower[k] }),
+            far_origin: std::array::from_fn(|k| if swap[k] { lower[k] } else { upper[k] }),
+            inv,
+            swap,
         }
     }
 
@@ -102,16 +116,19 @@ impl BoxRay {
         let mut near = [t_min; 4];
         let mut far = [t_max; 4];
         for axis in 0..3 {
-            let (lo, hi, inv) = (
-                self.lower_origin[axis],
-                self.upper_origin[axis],
+            let (entry, exit) = if self.swap[axis] {
+                (&n.max[axis], &n.min[axis])
+            } else {
+                (&n.min[axis], &n.max[axis])
+            };
+            let (o_near, o_far, inv) = (
+                self.near_origin[axis],
+                self.far_origin[axis],
                 self.inv[axis],
             );
             for k in 0..4 {
-                let a = (n.min[axis][k] - lo) * inv;
-                let b = (n.max[axis][k] - hi) * inv;
-                near[k] = max(near[k], min(a, b));
-                far[k] = min(far[k], max(a, b));
+                near[k] = max(near[k], (entry[k] - o_near) * inv);
+                far[k] = min(far[k], (exit[k] - o_far) * inv);
             }
         }
         let mut out = [f32::INFINITY; 4];
