@@ -144,6 +144,10 @@ const EMPTY_BIN: Bin = Bin {
     bounds: Box3::EMPTY,
 };
 
+/// The boxes and centroid boxes of two children: `(left, left centroids, right,
+/// right centroids)`.
+type ChildBoxes = (Box3, Box3, Box3, Box3);
+
 /// A range waiting to be turned into a node.
 struct Task {
     node: u32,
@@ -201,7 +205,7 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> BinaryT
         let count = task.end - task.start;
         max_depth = max_depth.max(task.depth);
         let area = task.bounds.half_area();
-        let split: Option<(usize, Option<(Box3, Box3, Box3, Box3)>)> = if count <= 1 {
+        let split: Option<(usize, Option<ChildBoxes>)> = if count <= 1 {
             None
         } else if task.depth >= MEDIAN_DEPTH {
             let range = &mut prims[task.start..task.end];
