@@ -27,16 +27,22 @@
 //! # Traversal
 //! The ray is clipped to the grid's box and `[t_min, t_max]`; each visited cell covers
 //! `[t_enter, t_exit]` of the ray (consecutive cells share the boundary value, so the
-//! intervals tile the ray exactly). Triangles of the cell are tested with that interval
-//! as the accepted range: a hit outside the cell is refused there (and found again in
-//! its own cell). The walk stops after the first cell that produced a hit nearer than
-//! its exit (at exactly the exit, the next cell may still offer an equal-distance hit
-//! with a lower face id).
+//! intervals tile the ray exactly). A hit on a triangle of the cell is accepted only if
+//! its parameter lies in that interval: a hit outside the cell is refused there (and
+//! accepted in its own cell, which the triangle also occupies). The walk stops after
+//! the first cell that produced a hit nearer than its exit (at exactly the exit, the
+//! next cell may still offer an equal-distance hit with a lower face id).
+//!
+//! Mailboxing (Amanatides and Woo): a triangle spanning several cells would be tested
+//! again in each. A per-thread [`Mailbox`] keeps, per triangle, the ray that tested it
+//! last and the result — the hit parameter over the whole ray, or none — so a triangle
+//! met again by the same ray is not re-tested; the cell rule is applied to the
+//! remembered parameter, which is exactly what a new test would give.
 //!
 //! - Complexity: build O(N + refs); a ray visits O(n_x + n_y + n_z) cells at worst.
-//! - Limitations: no mailboxing (a triangle spanning cells is tested in each one the
-//!   ray visits); uniform cells suit uniformly spread scenes and waste memory on
-//!   sparse ones ("teapot in a stadium").
+//! - Limitations: uniform cells suit uniformly spread scenes and waste memory and steps
+//!   on uneven ones ("teapot in a stadium"); the mailbox costs 12 bytes per triangle
+//!   per thread.
 
 use std::time::Instant;
 
@@ -97,6 +103,38 @@ pub struct UniformGrid {
     stats: GridStats,
 }
 
+/// The mailbox of one thread: per triangle, the ray that tested it last and the result
+/// (hit parameter over the whole ray, or NaN). Stamped by a ray counter, so nothing
+/// needs clearing between rays.
+#[derive(Clone, Debug, Default)]
+pub struct Mailbox {
+    ray: u32,
+    stamp: Vec<u32>,
+    result: Vec<f64>,
+}
+
+impl Mailbox {
+    /// A mailbox for the triangles of a grid.
+    #[must_use]
+    pub fn new(triangles: &SceneTriangles) -> Self {
+        Mailbox {
+            ray: 0,
+            stamp: vec![0; triangles.len()],
+            result: vec![f64::NAN; triangles.len()],
+        }
+    }
+
+    /// Starts a new ray.
+    fn next_ray(&mut self) {
+        self.ray = self.ray.wrapping_add(1);
+        if self.ray == 0 {
+            // After 2^32 rays the stamps would repeat: clear them once.
+            self.stamp.fill(0);
+            self.ray = 1;
+        }
+    }
+}
+
 /// What a traversal did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct GridCounters {
@@ -104,12 +142,15 @@ pub struct GridCounters {
     pub cells: u64,
     /// Exact triangle tests run.
     pub triangles: u64,
+    /// Tests answered by the mailbox (a triangle met again in a later cell).
+    pub mailbox_hits: u64,
 }
 
 impl std::ops::AddAssign for GridCounters {
     fn add_assign(&mut self, o: Self) {
         self.cells += o.cells;
         self.triangles += o.triangles;
+        self.mailbox_hits += o.mailbox_hits;
     }
 }
 
@@ -268,12 +309,13 @@ impl UniformGrid {
 
     /// The nearest hit with `ctx.t_min <= t <= t_max`, walking the cells front to
     /// back and accepting a hit only inside the cell being visited. `triangles` must be
-    /// the ones the grid was built from.
+    /// the ones the grid was built from, `mailbox` made for them (one per thread).
     pub fn closest_hit(
         &self,
         triangles: &SceneTriangles,
         ctx: &HitContext<'_>,
         t_max: f64,
+        mailbox: &mut Mailbox,
         counters: &mut GridCounters,
     ) -> GridHit {
         struct Run<'a, 'b> {
@@ -281,13 +323,19 @@ impl UniformGrid {
             triangles: &'a SceneTriangles,
             ctx: &'a HitContext<'b>,
             t_max: f64,
+            mailbox: &'a mut Mailbox,
             counters: &'a mut GridCounters,
         }
         impl WithAxisOrder for Run<'_, '_> {
             type Output = GridHit;
             fn run<O: AxisOrder>(self) -> GridHit {
-                self.grid
-                    .walk::<O>(self.triangles, self.ctx, self.t_max, self.counters)
+                self.grid.walk::<O>(
+                    self.triangles,
+                    self.ctx,
+                    self.t_max,
+                    self.mailbox,
+                    self.counters,
+                )
             }
         }
         ctx.ray.dispatch(Run {
@@ -295,6 +343,7 @@ impl UniformGrid {
             triangles,
             ctx,
             t_max,
+            mailbox,
             counters,
         })
     }
@@ -304,6 +353,7 @@ impl UniformGrid {
         triangles: &SceneTriangles,
         ctx: &HitContext<'_>,
         t_max: f64,
+        mailbox: &mut Mailbox,
         counters: &mut GridCounters,
     ) -> GridHit {
         let mut out = GridHit {
@@ -352,23 +402,37 @@ impl UniformGrid {
         let mut next = [exit(0, cell[0]), exit(1, cell[1]), exit(2, cell[2])];
         let (verts, polys) = (triangles.vertices(), triangles.triangle_polygons());
         let mut t_enter = t0;
+        mailbox.next_ray();
+        let ray_id = mailbox.ray;
         loop {
             let t_exit = next[0].min(next[1]).min(next[2]).min(t1).max(t_enter);
             counters.cells += 1;
-            let cell_ctx = HitContext {
-                t_min: t_enter,
-                ..*ctx
-            };
             for &tri in self.cell_triangles(cell) {
-                let before = out.hit;
-                counters.triangles += u64::from(cell_ctx.test::<O>(
-                    &verts[tri as usize],
-                    polys[tri as usize],
-                    t_exit,
-                    &mut out.hit,
-                ));
-                if out.hit != before {
-                    out.cell = Some(cell);
+                let slot = tri as usize;
+                let t = if mailbox.stamp[slot] == ray_id {
+                    counters.mailbox_hits += 1;
+                    mailbox.result[slot]
+                } else {
+                    let poly = polys[tri as usize] as usize;
+                    let t = if ctx.ignored[poly] {
+                        f64::NAN
+                    } else {
+                        counters.triangles += 1;
+                        ctx.ray
+                            .intersect::<O>(&verts[tri as usize], ctx.t_min, t_max, &ctx.tie)
+                            .unwrap_or(f64::NAN)
+                    };
+                    mailbox.stamp[slot] = ray_id;
+                    mailbox.result[slot] = t;
+                    t
+                };
+                // The seed's rule: only a hit inside this cell is accepted here.
+                if t >= t_enter && t <= t_exit {
+                    let before = out.hit;
+                    out.hit.offer(t, ctx.faces[polys[tri as usize] as usize]);
+                    if out.hit != before {
+                        out.cell = Some(cell);
+                    }
                 }
             }
             if out.hit.is_hit() && out.hit.t < t_exit {

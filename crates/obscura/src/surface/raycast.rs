@@ -53,7 +53,7 @@ use glam::DVec3;
 
 use crate::accel::bvh::traverse::{TraceCounters, TraversalStack};
 use crate::accel::bvh::{Bvh, BvhOptions};
-use crate::accel::grid::{GridCounters, GridOptions, UniformGrid};
+use crate::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
 use crate::accel::triangles::{
     AxisOrder, ClosestHit, HitContext, PrimaryRays, SceneTriangles, WatertightRay, WithAxisOrder,
 };
@@ -92,6 +92,8 @@ pub struct RayCounters {
     pub cells: u64,
     /// Grid hits whose point is not inside the cell that accepted them (must stay 0).
     pub hits_outside_cell: u64,
+    /// Grid tests answered by the mailbox.
+    pub mailbox_hits: u64,
 }
 
 impl AddAssign for RayCounters {
@@ -103,6 +105,7 @@ impl AddAssign for RayCounters {
         self.triangle_tests += o.triangle_tests;
         self.cells += o.cells;
         self.hits_outside_cell += o.hits_outside_cell;
+        self.mailbox_hits += o.mailbox_hits;
     }
 }
 
@@ -406,22 +409,26 @@ pub fn render_grid(
 ) -> Result<(Frame, Stats)> {
     let setup = Setup::new(view, triangles);
     let start = Instant::now();
-    let (frame, counters) = setup.cast(options, |ctx, counters| {
-        let mut c = GridCounters::default();
-        let out = grid.closest_hit(triangles, ctx, setup.rays.far, &mut c);
-        counters.cells += c.cells;
-        counters.triangle_tests += c.triangles;
-        if let Some(cell) = out.cell {
-            // The seed's rule, checked independently of the traversal's parameters:
-            // the accepted point must lie in the accepted cell.
-            let (lo, hi) = grid.cell_box(cell);
-            let p = ctx.ray.origin + ctx.ray.direction * out.hit.t;
-            let tol = (hi - lo) * 1e-6 + p.abs() * 1e-12;
-            if !(p.cmpge(lo - tol).all() && p.cmple(hi + tol).all()) {
-                counters.hits_outside_cell += 1;
+    let (frame, counters) = setup.cast_bands(options, |band, counters| {
+        let mut mailbox = Mailbox::new(triangles);
+        setup.cast_band(band, counters, |ctx, counters| {
+            let mut c = GridCounters::default();
+            let out = grid.closest_hit(triangles, ctx, setup.rays.far, &mut mailbox, &mut c);
+            counters.cells += c.cells;
+            counters.triangle_tests += c.triangles;
+            counters.mailbox_hits += c.mailbox_hits;
+            if let Some(cell) = out.cell {
+                // The seed's rule, checked independently of the traversal's parameters:
+                // the accepted point must lie in the accepted cell.
+                let (lo, hi) = grid.cell_box(cell);
+                let p = ctx.ray.origin + ctx.ray.direction * out.hit.t;
+                let tol = (hi - lo) * 1e-6 + p.abs() * 1e-12;
+                if !(p.cmpge(lo - tol).all() && p.cmple(hi + tol).all()) {
+                    counters.hits_outside_cell += 1;
+                }
             }
-        }
-        out.hit
+            out.hit
+        })
     })?;
     let mut stats = setup.stats(&counters, ms_since(start));
     let g = grid.stats();
@@ -439,6 +446,7 @@ pub fn render_grid(
         "triangle_tests_per_ray",
         per(counters.triangle_tests, counters.rays),
     );
+    stats.set("mailbox_hits", counters.mailbox_hits as f64);
     stats.set("hits_outside_cell", counters.hits_outside_cell as f64);
     Ok((frame, stats))
 }
