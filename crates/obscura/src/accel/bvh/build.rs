@@ -289,8 +289,30 @@ pub(super) fn build(triangles: &SceneTriangles, options: &BvhOptions) -> BinaryT
 
 #[inline(always)]
 fn bin_of(c: f32, lo: f32, scale: f32, bins: usize) -> usize {
-    // Through i32: a float to 64-bit unsigned conversion is many instructions on x86.
-    (((c - lo) * scale) as i32).clamp(0, bins as i32 - 1) as usize
+    // `x = (c - lo) * scale` is in [0, bins]. Adding 2^23 to `x - 1/2` (clamped at 0)
+    // leaves round(x - 1/2) in the low mantissa bits (the sum stays in [2^23, 2^24),
+    // where floats are the integers): floor(x) but for ties, by a branch-free
+    // conversion, which Rust's `as` is not (it handles NaN and overflow), and which
+    // vectorizes over the three axes. The mapping is monotone and the same in the
+    // sweep and the partition, which is all binning needs.
+    const MAGIC: f32 = 8_388_608.0;
+    let x = (c - lo) * scale - 0.5;
+    let x = if x > 0.0 { x } else { 0.0 } + MAGIC;
+    ((x.to_bits() & 0x007f_ffff) as usize).min(bins - 1)
+}
+
+/// [`bin_of`] on the three axes at once (same operations lane by lane, so the same
+/// results).
+#[inline(always)]
+fn bins_of(c: &[f32; 4], lo: &[f32; 4], scale: &[f32; 4], bins: usize) -> [usize; 3] {
+    const MAGIC: f32 = 8_388_608.0;
+    let mut out = [0u32; 4];
+    for k in 0..4 {
+        let x = (c[k] - lo[k]) * scale[k] - 0.5;
+        let x = if x > 0.0 { x } else { 0.0 } + MAGIC;
+        out[k] = (x.to_bits() & 0x007f_ffff).min(bins as u32 - 1);
+    }
+    [out[0] as usize, out[1] as usize, out[2] as usize]
 }
 
 /// The best SAH plane of a range.
@@ -310,7 +332,7 @@ fn sah_split(prims: &[Prim], cbox: &Box3, bins: &mut [[Bin; 3]]) -> Option<Plan>
     // Small ranges need few bins: the sweep and the reset cost O(bins) per node.
     let nb = bins.len().min(prims.len().max(4));
     let bins = &mut bins[..nb];
-    let mut scale = [0.0f32; 3];
+    let mut scale = [0.0f32; 4];
     let mut usable = [false; 3];
     for k in 0..3 {
         let extent = cbox.max[k] - cbox.min[k];
@@ -322,11 +344,11 @@ fn sah_split(prims: &[Prim], cbox: &Box3, bins: &mut [[Bin; 3]]) -> Option<Plan>
     }
     bins.fill([EMPTY_BIN; 3]);
     for p in prims {
-        let (c, b) = (&p.centroid, &p.bounds);
+        let index = bins_of(&p.centroid, &cbox.min, &scale, nb);
         for k in 0..3 {
-            let bin = &mut bins[bin_of(c[k], cbox.min[k], scale[k], nb)][k];
+            let bin = &mut bins[index[k]][k];
             bin.count += 1;
-            bin.bounds.grow(b);
+            bin.bounds.grow(&p.bounds);
         }
     }
     let mut best: Option<(usize, usize, f64)> = None;
