@@ -40,8 +40,10 @@
 //!   Output: a [`Frame`] (face id and eye-space depth `t` as `f32`) and [`Stats`].
 //! - Complexity: brute force O(p T) for p pixels and T triangles; bounds O(p (K + T_hit))
 //!   for K objects; BVH about O(p log T); grid O(p (cells per ray + refs per cell)).
-//! - Parallel: rows are independent; with the `parallel` feature they run on rayon's
-//!   current pool (the CLI's `--threads`).
+//! - Order and parallelism: pixels are traced in 8x8 tiles (neighbouring rays visit the
+//!   same nodes and triangles, which stay in cache); bands of 8 rows are the unit of
+//!   work, run on rayon's current pool with the `parallel` feature (the CLI's
+//!   `--threads`; 1 is single-threaded), sequentially without it.
 //! - Limitations: one sample per pixel (no anti-aliasing); the depth is the hit's `t`,
 //!   not the rasterizers' interpolated key, so depths agree with the z-buffer's to
 //!   `f32` rounding, not bit for bit.
@@ -82,7 +84,7 @@ pub struct RayCounters {
     pub rays: u64,
     /// Rays that hit a face.
     pub hits: u64,
-    /// Bounding volumes (or BVH boxes) tested.
+    /// Bounding volumes tested (bounds variant), or BVH nodes visited.
     pub bound_tests: u64,
     /// Bounding volumes a ray met (bounds variant).
     pub bound_hits: u64,
