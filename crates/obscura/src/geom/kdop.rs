@@ -153,6 +153,65 @@ impl Kdop {
     }
 }
 
+/// A ray's projections on the 13 directions of [`KDOP_AXES`], computed once to test it
+/// against many k-DOPs (and axis-aligned boxes, the first three directions).
+#[derive(Clone, Copy, Debug)]
+pub struct RaySlabs {
+    /// `n · origin` per direction.
+    origin: [f64; 13],
+    /// `1 / (n · direction)` per direction (infinite when the ray is parallel to the
+    /// slab).
+    inv: [f64; 13],
+    /// `n · direction` per direction.
+    along: [f64; 13],
+}
+
+impl RaySlabs {
+    /// Projects the ray `origin + t direction`.
+    #[must_use]
+    pub fn new(origin: DVec3, direction: DVec3) -> Self {
+        let along = KDOP_AXES.map(|n| n.dot(direction));
+        RaySlabs {
+            origin: KDOP_AXES.map(|n| n.dot(origin)),
+            inv: along.map(|a| 1.0 / a),
+            along,
+        }
+    }
+
+    /// Narrows `[t0, t1]` to where the ray is inside slab `i` (`lo <= n_i · x <= hi`);
+    /// false when it becomes empty. The same arithmetic as the unprojected test.
+    #[inline]
+    pub fn clip(&self, i: usize, lo: f64, hi: f64, t0: &mut f64, t1: &mut f64) -> bool {
+        let so = self.origin[i];
+        if self.along[i] == 0.0 {
+            return so >= lo && so <= hi;
+        }
+        let inv = self.inv[i];
+        let (mut a, mut b) = ((lo - so) * inv, (hi - so) * inv);
+        if a > b {
+            std::mem::swap(&mut a, &mut b);
+        }
+        *t0 = t0.max(a);
+        *t1 = t1.min(b);
+        *t0 <= *t1
+    }
+}
+
+impl Kdop {
+    /// [`Kdop::ray_interval`] with the ray's projections computed beforehand.
+    #[must_use]
+    pub fn ray_interval_projected(&self, ray: &RaySlabs) -> Option<(f64, f64)> {
+        let mut t0 = f64::NEG_INFINITY;
+        let mut t1 = f64::INFINITY;
+        for &i in self.kind.axis_indices() {
+            if !ray.clip(i, self.lo[i], self.hi[i], &mut t0, &mut t1) {
+                return None;
+            }
+        }
+        Some((t0, t1))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -266,6 +325,33 @@ mod tests {
                 }
             }
             assert!(hits > 20 && misses > 20, "{hits} {misses}");
+        }
+    }
+
+    #[test]
+    fn projected_rays_give_the_same_intervals() {
+        let mut rng = SplitMix64(23);
+        for kind in [KdopKind::K14, KdopKind::K18, KdopKind::K26] {
+            let k = Kdop::from_points(&random_points(&mut rng, 30), kind).unwrap();
+            for _ in 0..300 {
+                let o = DVec3::new(
+                    rng.range(-5.0, 5.0),
+                    rng.range(-5.0, 5.0),
+                    rng.range(-5.0, 5.0),
+                );
+                let mut d = DVec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                );
+                if rng.next_f64() < 0.2 {
+                    d.z = 0.0; // parallel to some slabs
+                }
+                assert_eq!(
+                    k.ray_interval(o, d),
+                    k.ray_interval_projected(&RaySlabs::new(o, d))
+                );
+            }
         }
     }
 

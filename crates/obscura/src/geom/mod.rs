@@ -12,7 +12,7 @@ mod polygon;
 mod sphere;
 
 pub use aabb::Aabb;
-pub use kdop::{Kdop, KdopKind};
+pub use kdop::{Kdop, KdopKind, RaySlabs};
 pub use obb::Obb;
 pub use plane::{Plane, PlaneSide};
 pub use polygon::{

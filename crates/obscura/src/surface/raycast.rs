@@ -59,7 +59,7 @@ use crate::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
 use crate::accel::triangles::{
     AxisOrder, ClosestHit, HitContext, PrimaryRays, SceneTriangles, WatertightRay, WithAxisOrder,
 };
-use crate::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb, Sphere};
+use crate::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb, RaySlabs, Sphere};
 use crate::surface::{RenderOptions, Stats};
 use crate::view::PreparedView;
 use crate::{Frame, Result};
@@ -219,20 +219,22 @@ impl ObjectBound {
         })
     }
 
-    fn interval(&self, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+    /// The ray's interval inside the volume; `slabs` are the ray's projections on the
+    /// k-DOP directions (the first three are the axes), computed once per ray.
+    fn interval(&self, o: DVec3, d: DVec3, slabs: &RaySlabs) -> Option<(f64, f64)> {
         match self {
             ObjectBound::Sphere(s) => ray_sphere(s, o, d),
             ObjectBound::Aabb(b) => {
                 let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
                 for k in 0..3 {
-                    if !crate::geom::obb::slab(o[k], d[k], b.min[k], b.max[k], &mut t0, &mut t1) {
+                    if !slabs.clip(k, b.min[k], b.max[k], &mut t0, &mut t1) {
                         return None;
                     }
                 }
                 Some((t0, t1))
             }
             ObjectBound::Obb(b) => b.ray_interval(o, d),
-            ObjectBound::Kdop(k) => k.ray_interval(o, d),
+            ObjectBound::Kdop(k) => k.ray_interval_projected(slabs),
         }
     }
 }
@@ -275,10 +277,11 @@ pub fn render_bounds(
         type Output = ClosestHit;
         fn run<O: AxisOrder>(self) -> ClosestHit {
             let (o, d) = (self.ctx.ray.origin, self.ctx.ray.direction);
+            let slabs = RaySlabs::new(o, d);
             self.candidates.clear();
             for &(k, ref b) in self.bounds {
                 self.counters.bound_tests += 1;
-                if let Some((t0, t1)) = b.interval(o, d)
+                if let Some((t0, t1)) = b.interval(o, d, &slabs)
                     && t1 >= self.ctx.t_min
                     && t0 <= self.far
                 {
