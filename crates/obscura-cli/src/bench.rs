@@ -6,11 +6,11 @@ use std::time::Instant;
 
 use clap::Args;
 use obscura::scene::{MeshBuilder, ObjectDesc, random::scaled_triangles};
-use obscura::surface::{Algorithm, RenderOptions, render};
+use obscura::surface::{Algorithm, render};
 use obscura::{Result, Scene, prepare};
 use serde_json::json;
 
-use crate::common::ViewArgs;
+use crate::common::{AlgoArgs, ViewArgs};
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -27,7 +27,7 @@ pub struct BenchArgs {
     #[command(flatten)]
     pub view: ViewArgs,
     /// Comma-separated algorithms (default: all).
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::render::parse_algo)]
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::common::parse_algo)]
     pub algos: Option<Vec<Algorithm>>,
     /// The largest face count of the sweep.
     #[arg(long, default_value_t = 1_000_000)]
@@ -35,6 +35,8 @@ pub struct BenchArgs {
     /// Seconds an algorithm may take for one size; sizes predicted to take longer are skipped.
     #[arg(long, default_value_t = 60.0)]
     pub budget: f64,
+    #[command(flatten)]
+    pub tuning: AlgoArgs,
     /// Also write the results as JSON.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
@@ -147,7 +149,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     );
     let mut results: Vec<(Algorithm, Vec<(usize, f64)>)> =
         algos.iter().map(|&a| (a, Vec::new())).collect();
-    let options = RenderOptions::default();
+    let options = args.tuning.options();
     for &n in &sizes {
         let scene = scene_for(n);
         let viewport = args.view.viewport_or(&scene, (640, 360))?;

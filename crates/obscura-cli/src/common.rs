@@ -4,7 +4,10 @@ use std::time::Instant;
 
 use clap::Args;
 use glam::DVec3;
+use obscura::accel::bsp::{BspOptions, BspTraversal};
 use obscura::cull::backface::BackfaceMode;
+use obscura::geom::BoundsKind;
+use obscura::surface::{Algorithm, RenderOptions};
 use obscura::{Camera, Error, PrepareOptions, Projection, Result, Scene, Viewport};
 
 /// The scene and how to look at it.
@@ -44,6 +47,43 @@ pub struct ViewArgs {
     /// Worker threads (default: all cores; 1 for single-thread figures).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+}
+
+/// Options that tune particular algorithms.
+#[derive(Args, Debug, Clone)]
+pub struct AlgoArgs {
+    /// Bounding volume for raycast-bounds: sphere, aabb, obb, kdop.
+    #[arg(long, default_value = "aabb", value_parser = parse_bounds)]
+    pub bounds: BoundsKind,
+    /// Octree depth for the octree algorithm: voxels are 2^DEPTH on a side (at most 10).
+    #[arg(long, value_name = "DEPTH", default_value_t = 7)]
+    pub octree_depth: u32,
+    /// BSP traversal: front-to-back (write each pixel once, stop when the image is
+    /// full) or back-to-front (the painter's algorithm).
+    #[arg(long, default_value = "front-to-back", value_parser = parse_bsp_traversal)]
+    pub bsp_traversal: BspTraversal,
+}
+
+impl AlgoArgs {
+    /// The library's options from these flags.
+    pub fn options(&self) -> RenderOptions {
+        RenderOptions::default()
+            .with_bounds(self.bounds)
+            .with_octree_depth(self.octree_depth)
+            .with_bsp(BspOptions::default().with_traversal(self.bsp_traversal))
+    }
+}
+
+pub fn parse_algo(s: &str) -> std::result::Result<Algorithm, String> {
+    s.parse().map_err(|e: obscura::Error| e.to_string())
+}
+
+pub fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {
+    s.parse().map_err(|e: obscura::Error| e.to_string())
+}
+
+pub fn parse_bsp_traversal(s: &str) -> std::result::Result<BspTraversal, String> {
+    s.parse().map_err(|e: obscura::Error| e.to_string())
 }
 
 /// The default image size.

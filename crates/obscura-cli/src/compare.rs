@@ -6,12 +6,11 @@ use std::time::Instant;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use obscura::geom::BoundsKind;
-use obscura::surface::{Algorithm, RenderOptions, Stats, render};
+use obscura::surface::{Algorithm, Stats, render};
 use obscura::{Frame, Result, RgbImage, prepare};
 use serde_json::json;
 
-use crate::common::ViewArgs;
+use crate::common::{AlgoArgs, ViewArgs};
 use crate::grid;
 
 pub const EXAMPLES: &str = "\
@@ -25,11 +24,10 @@ pub struct CompareArgs {
     #[command(flatten)]
     pub view: ViewArgs,
     /// Comma-separated algorithms (default: all). The z-buffer always runs as reference.
-    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::render::parse_algo)]
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::common::parse_algo)]
     pub algos: Option<Vec<Algorithm>>,
-    /// Bounding volume for raycast-bounds: sphere, aabb, obb, kdop.
-    #[arg(long, default_value = "aabb", value_parser = crate::render::parse_bounds)]
-    pub bounds: BoundsKind,
+    #[command(flatten)]
+    pub tuning: AlgoArgs,
     /// The grid image: each algorithm's picture and its difference mask.
     #[arg(
         short = 'o',
@@ -115,8 +113,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         for &algorithm in &algos {
             let pb = progress_bar(algorithm.name());
             let bar = pb.clone();
-            let options = RenderOptions::default()
-                .with_bounds(args.bounds)
+            let options = args
+                .tuning
+                .options()
                 .with_progress(Arc::new(move |f| bar.set_position((f * 1000.0) as u64)));
             let start = Instant::now();
             let result = render(algorithm, &view, &options)

@@ -4,12 +4,11 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use obscura::geom::BoundsKind;
-use obscura::surface::{Algorithm, RenderOptions, render};
+use obscura::surface::{Algorithm, render};
 use obscura::{Result, prepare};
 use serde_json::json;
 
-use crate::common::ViewArgs;
+use crate::common::{AlgoArgs, ViewArgs};
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -35,11 +34,10 @@ pub struct RenderArgs {
     pub view: ViewArgs,
     /// Hidden-surface algorithm: zbuffer, scanline, depth-sort, depth-sort-matrix, bsp,
     /// warnock, raycast, raycast-bounds, raycast-bvh, raycast-grid, octree.
-    #[arg(long, default_value = "zbuffer", value_parser = parse_algo)]
+    #[arg(long, default_value = "zbuffer", value_parser = crate::common::parse_algo)]
     pub algo: Algorithm,
-    /// Bounding volume for raycast-bounds: sphere, aabb, obb, kdop.
-    #[arg(long, default_value = "aabb", value_parser = parse_bounds)]
-    pub bounds: BoundsKind,
+    #[command(flatten)]
+    pub tuning: AlgoArgs,
     /// The PNG to write.
     #[arg(
         short = 'o',
@@ -65,20 +63,12 @@ pub struct RenderArgs {
     pub stats_json: Option<PathBuf>,
 }
 
-pub fn parse_algo(s: &str) -> std::result::Result<Algorithm, String> {
-    s.parse().map_err(|e: obscura::Error| e.to_string())
-}
-
-pub fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {
-    s.parse().map_err(|e: obscura::Error| e.to_string())
-}
-
 pub fn run(args: &RenderArgs) -> Result<()> {
     let loaded = args.view.load()?;
     let scene = &loaded.scene;
     let viewport = args.view.viewport(scene)?;
     let camera = args.view.camera(scene, viewport)?;
-    let options = RenderOptions::default().with_bounds(args.bounds);
+    let options = args.tuning.options();
     let prep = args.view.prepare_options();
     let threads = args.view.threads.unwrap_or(0);
 

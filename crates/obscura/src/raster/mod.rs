@@ -9,5 +9,5 @@
 mod coverage;
 mod depth_plane;
 
-pub use coverage::{EdgeFunction, FillRule, PixelRect, PolygonCoverage};
+pub use coverage::{EdgeFunction, FillRule, PixelRect, PolygonCoverage, sample_rect};
 pub use depth_plane::DepthPlane;

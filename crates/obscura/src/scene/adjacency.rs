@@ -5,6 +5,7 @@
 //! its own three vertices, as in many OBJ exports) get their adjacency too.
 
 use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
 
 use glam::DVec3;
 
@@ -35,28 +36,54 @@ pub struct EdgeAdjacency {
 }
 
 impl EdgeAdjacency {
-    /// Computes the adjacency of a mesh.
+    /// Computes the adjacency of a mesh in O(n) expected time: welding by hashing, then
+    /// one radix sort of the half-edges packed into `u64` keys (falling back to a
+    /// comparison sort for meshes too large to pack).
     #[must_use]
     pub fn new(mesh: &Mesh) -> Self {
         let weld = weld_positions(mesh.positions());
-        // (min, max, direction bit, polygon) packed for one sort.
-        let mut half: Vec<(u64, u32)> = Vec::with_capacity(mesh.polygon_count() * 3);
-        for p in 0..mesh.polygon_count() {
-            let poly = mesh.polygon(p);
+        let (starts, indices, _) = mesh.polygon_arrays();
+        let polygons = mesh.polygon_count();
+        let vbits = bits_for(weld.len());
+        let pbits = bits_for(polygons);
+        // Half-edges as (a, b, direction, polygon) with a < b: sorted, the two sides of
+        // an edge become neighbours, forward before backward, lowest polygon first.
+        let mut half: Vec<(u32, u32, u32, u32)> = Vec::with_capacity(indices.len());
+        for p in 0..polygons {
+            let poly = &indices[starts[p] as usize..starts[p + 1] as usize];
             for k in 0..poly.len() {
                 let u = weld[poly[k] as usize];
                 let v = weld[poly[(k + 1) % poly.len()] as usize];
-                if u == v {
-                    continue;
+                if u != v {
+                    let (a, b, dir) = if u < v { (u, v, 0) } else { (v, u, 1) };
+                    half.push((a, b, dir, p as u32));
                 }
-                let (a, b, dir) = if u < v { (u, v, 0) } else { (v, u, 1) };
-                half.push(((u64::from(a) << 32 | u64::from(b)) << 1 | dir, p as u32));
             }
         }
-        half.sort_unstable();
+        if 2 * vbits + 1 + pbits <= 64 {
+            let (sb, sd) = (pbits + 1, pbits);
+            let sa = sb + vbits;
+            let mut keys: Vec<u64> = half
+                .iter()
+                .map(|&(a, b, d, p)| {
+                    u64::from(a) << sa | u64::from(b) << sb | u64::from(d) << sd | u64::from(p)
+                })
+                .collect();
+            radix_sort(&mut keys, sa + vbits);
+            let mask = |bits: u32| (1u64 << bits) - 1;
+            for (h, &k) in half.iter_mut().zip(&keys) {
+                *h = (
+                    (k >> sa & mask(vbits)) as u32,
+                    (k >> sb & mask(vbits)) as u32,
+                    (k >> sd & 1) as u32,
+                    (k & mask(pbits)) as u32,
+                );
+            }
+        } else {
+            half.sort_unstable();
+        }
         let mut edges: Vec<MeshEdge> = Vec::with_capacity(half.len() / 2 + 1);
-        for &(key, poly) in &half {
-            let (a, b, dir) = ((key >> 33) as u32, (key >> 1) as u32, key & 1);
+        for &(a, b, dir, poly) in &half {
             match edges.last_mut() {
                 Some(e) if e.a == a && e.b == b => {
                     e.uses += 1;
@@ -96,16 +123,69 @@ impl EdgeAdjacency {
     }
 }
 
+/// Bits needed to store values `0..n` (at least 1).
+fn bits_for(n: usize) -> u32 {
+    (usize::BITS - n.saturating_sub(1).leading_zeros()).max(1)
+}
+
+/// Sorts keys whose set bits all lie below `bits`: least-significant-digit radix sort
+/// with 8-bit digits, skipping digits on which all keys agree.
+fn radix_sort(keys: &mut Vec<u64>, bits: u32) {
+    let mut scratch = vec![0u64; keys.len()];
+    for shift in (0..bits).step_by(8) {
+        let mut count = [0usize; 256];
+        for &k in keys.iter() {
+            count[(k >> shift & 0xff) as usize] += 1;
+        }
+        if count.contains(&keys.len()) {
+            continue;
+        }
+        let mut offset = [0usize; 256];
+        let mut sum = 0;
+        for (o, c) in offset.iter_mut().zip(count) {
+            *o = sum;
+            sum += c;
+        }
+        for &k in keys.iter() {
+            let d = (k >> shift & 0xff) as usize;
+            scratch[offset[d]] = k;
+            offset[d] += 1;
+        }
+        std::mem::swap(keys, &mut scratch);
+    }
+}
+
+/// A small multiplicative hasher for bit patterns of coordinates: the standard library's
+/// DoS-resistant hasher costs more than the rest of welding together.
+#[derive(Default)]
+struct BitsHasher(u64);
+
+impl std::hash::Hasher for BitsHasher {
+    fn finish(&self) -> u64 {
+        self.0 ^ self.0 >> 29
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.write_u64(u64::from(*b));
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(23) ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+}
+
 /// Welded id per vertex: equal positions (bitwise, with -0 = +0) get the lowest index.
 fn weld_positions(p: &[DVec3]) -> Vec<u32> {
-    let key = |v: DVec3| {
-        [
+    type Key = (u64, u64, u64);
+    let key = |v: DVec3| -> Key {
+        (
             (v.x + 0.0).to_bits(),
             (v.y + 0.0).to_bits(),
             (v.z + 0.0).to_bits(),
-        ]
+        )
     };
-    let mut map: HashMap<[u64; 3], u32> = HashMap::with_capacity(p.len());
+    let mut map: HashMap<Key, u32, BuildHasherDefault<BitsHasher>> =
+        HashMap::with_capacity_and_hasher(p.len(), BuildHasherDefault::default());
     p.iter()
         .enumerate()
         .map(|(i, &v)| *map.entry(key(v)).or_insert(i as u32))
@@ -167,6 +247,59 @@ mod tests {
         assert!(adj.is_closed());
         assert_eq!(adj.edges.len(), 12); // quads are kept whole: the 12 cube edges
         assert!(is_convex_closed(&cube, &adj, 1e-9));
+    }
+
+    #[test]
+    fn radix_sort_sorts() {
+        let mut rng = crate::scene::demo::SplitMix64(3);
+        for bits in [1u32, 7, 8, 9, 37, 64] {
+            let mask = if bits == 64 {
+                u64::MAX
+            } else {
+                (1u64 << bits) - 1
+            };
+            let mut keys: Vec<u64> = (0..1000).map(|_| rng.next_u64() & mask).collect();
+            let mut expected = keys.clone();
+            expected.sort_unstable();
+            radix_sort(&mut keys, bits);
+            assert_eq!(keys, expected, "{bits} bits");
+        }
+        assert_eq!(
+            (
+                bits_for(0),
+                bits_for(1),
+                bits_for(2),
+                bits_for(256),
+                bits_for(257)
+            ),
+            (1, 1, 1, 8, 9)
+        );
+    }
+
+    #[test]
+    fn soups_are_welded() {
+        // Six separate quads with their own vertices each still make a closed cube.
+        let cube = demo::box_mesh(DVec3::splat(-1.0), DVec3::splat(1.0));
+        let mut b = crate::scene::MeshBuilder::new();
+        for p in 0..cube.polygon_count() {
+            let base = b.vertex_count() as u32;
+            for &v in cube.polygon(p) {
+                b.push_position(cube.positions()[v as usize] * 1.0);
+            }
+            b.push_face(&[base, base + 1, base + 2, base + 3], None)
+                .unwrap();
+        }
+        let soup = b.finish().0;
+        let adj = EdgeAdjacency::new(&soup);
+        assert!(adj.is_closed());
+        assert_eq!(adj.edges.len(), 12);
+        assert_eq!(
+            adj.weld
+                .iter()
+                .collect::<std::collections::HashSet<_>>()
+                .len(),
+            8
+        );
     }
 
     #[test]

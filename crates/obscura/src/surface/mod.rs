@@ -19,6 +19,7 @@
 pub mod bsp;
 pub mod depth_sort;
 pub mod octree;
+mod paint;
 pub mod raycast;
 pub mod scanline;
 pub mod warnock;

@@ -1,0 +1,594 @@
+//! BSP tree: the order invariants of the traversal checked node by node from many
+//! viewpoints, frames equal to the z-buffer's, one tree serving many views, options,
+//! statistics and bad input.
+
+use glam::{DMat4, DVec3};
+use obscura::accel::bsp::{BspOptions, BspTraversal, BspTree, Viewpoint};
+use obscura::geom::polygon_area;
+use obscura::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport, demo, demo::SplitMix64};
+use obscura::surface::{Algorithm, RenderOptions, bsp, render};
+use obscura::{BACKGROUND, Frame, PrepareOptions, PreparedView, prepare};
+
+/// A scene of `n` random triangles (one object each) in a cube of side 10, some
+/// interpenetrating.
+fn random_triangles(n: usize, seed: u64) -> Scene {
+    let mut rng = SplitMix64(seed);
+    let mut s = Scene::new();
+    for i in 0..n {
+        let c = DVec3::new(
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+        );
+        let mut b = MeshBuilder::new();
+        for _ in 0..3 {
+            b.push_position(
+                c + DVec3::new(
+                    rng.range(-1.5, 1.5),
+                    rng.range(-1.5, 1.5),
+                    rng.range(-1.5, 1.5),
+                ),
+            );
+        }
+        b.push_face(&[0, 1, 2], None).unwrap();
+        s.add(ObjectDesc::new(format!("t{i}"), b.finish().0))
+            .unwrap();
+    }
+    s
+}
+
+fn quad_object(name: &str, pts: [DVec3; 4]) -> ObjectDesc {
+    let mut b = MeshBuilder::new();
+    for p in pts {
+        b.push_position(p);
+    }
+    b.push_face(&[0, 1, 2, 3], None).unwrap();
+    ObjectDesc::new(name, b.finish().0)
+}
+
+fn view<'s>(scene: &'s Scene, cam: &Camera, w: u32, h: u32) -> PreparedView<'s> {
+    let vp = Viewport::new(u64::from(w), u64::from(h)).unwrap();
+    prepare(scene, cam, vp, &PrepareOptions::default()).unwrap()
+}
+
+fn options(traversal: BspTraversal) -> RenderOptions {
+    RenderOptions::default().with_bsp(BspOptions::default().with_traversal(traversal))
+}
+
+/// Asserts that at least `min_fraction` of the pixels have the z-buffer's id; prints
+/// the differing pixels otherwise.
+fn assert_like_zbuffer(frame: &Frame, view: &PreparedView<'_>, min_fraction: f64, label: &str) {
+    let (z, _) = render(Algorithm::ZBuffer, view, &RenderOptions::default()).unwrap();
+    let diffs = frame.differences(&z);
+    let fraction = 1.0 - diffs.len() as f64 / z.ids.len() as f64;
+    assert!(
+        fraction >= min_fraction,
+        "{label}: {} of {} pixels differ from the z-buffer (x, y, got, z-buffer): {:?}",
+        diffs.len(),
+        z.ids.len(),
+        &diffs[..diffs.len().min(30)]
+    );
+}
+
+fn both_traversals(view: &PreparedView<'_>, min_fraction: f64, label: &str) {
+    for t in [BspTraversal::BackToFront, BspTraversal::FrontToBack] {
+        let (frame, _) = bsp::render(view, &options(t)).unwrap();
+        assert_like_zbuffer(&frame, view, min_fraction, &format!("{label} {}", t.name()));
+    }
+}
+
+/// For every node: from a viewpoint on its front side, every fragment of the back
+/// subtree comes before the node's fragments, which come before the front subtree's;
+/// the reverse from behind. Nodes whose plane holds the viewpoint are not constrained.
+fn check_order_invariants(tree: &BspTree, vp: Viewpoint) -> usize {
+    let order = tree.paint_order(vp, BspTraversal::BackToFront);
+    let total: usize = (0..tree.node_count() as u32)
+        .map(|n| tree.node_fragments(n).len())
+        .sum();
+    assert_eq!(order.len(), total, "every fragment is painted once");
+    let mut pos = vec![usize::MAX; order.iter().max().map_or(0, |&m| m as usize + 1)];
+    for (i, &f) in order.iter().enumerate() {
+        assert_eq!(pos[f as usize], usize::MAX, "fragment {f} painted twice");
+        pos[f as usize] = i;
+    }
+    // Subtree position ranges, children first (children have larger indices).
+    let n = tree.node_count();
+    let mut range = vec![(usize::MAX, 0usize); n];
+    let mut own = vec![(usize::MAX, 0usize); n];
+    let merge = |a: (usize, usize), b: (usize, usize)| (a.0.min(b.0), a.1.max(b.1));
+    for i in (0..n).rev() {
+        let node = tree.node(i as u32);
+        for &f in tree.node_fragments(i as u32) {
+            own[i] = merge(own[i], (pos[f as usize], pos[f as usize]));
+        }
+        let mut r = own[i];
+        for c in [node.front, node.back].into_iter().flatten() {
+            assert!(c as usize > i);
+            r = merge(r, range[c as usize]);
+        }
+        range[i] = r;
+    }
+    let mut checked = 0;
+    for (i, own) in own.iter().enumerate() {
+        let node = tree.node(i as u32);
+        let side = vp.side(&node.plane);
+        if side == 0.0 {
+            continue;
+        }
+        let (first, last) = if side > 0.0 {
+            (node.back, node.front)
+        } else {
+            (node.front, node.back)
+        };
+        let empty = (usize::MAX, 0usize);
+        let groups = [
+            first.map_or(empty, |c| range[c as usize]),
+            *own,
+            last.map_or(empty, |c| range[c as usize]),
+        ];
+        for a in 0..3 {
+            for b in a + 1..3 {
+                let (ga, gb) = (groups[a], groups[b]);
+                if ga != empty && gb != empty {
+                    assert!(
+                        ga.1 < gb.0,
+                        "node {i}: group {a} (far subtree, node, near subtree) not before group {b}"
+                    );
+                }
+            }
+        }
+        checked += 1;
+    }
+    checked
+}
+
+#[test]
+fn traversal_order_holds_from_both_sides_of_every_node() {
+    for (scene, views) in [(random_triangles(300, 11), 6), (demo::default_scene(), 4)] {
+        let tree = BspTree::build(&scene, &BspOptions::default()).unwrap();
+        assert!(tree.stats().splits > 0);
+        let scale = scene.bounds().extent().max_element();
+        let mut rng = SplitMix64(99);
+        let mut viewpoints = Vec::new();
+        for _ in 0..views {
+            let p = scene.bounds().center()
+                + DVec3::new(rng.range(-1., 1.), rng.range(-1., 1.), rng.range(-1., 1.)) * scale;
+            viewpoints.push(Viewpoint::Point(p));
+            viewpoints.push(Viewpoint::Direction(p - scene.bounds().center()));
+        }
+        // Just in front of and just behind node planes, at a point of the node's
+        // polygon (or of the plane, for an axis-aligned node without polygons).
+        let step = (tree.node_count() / 40).max(1);
+        for i in (0..tree.node_count()).step_by(step) {
+            let node = tree.node(i as u32);
+            let c = match tree.node_fragments(i as u32).first() {
+                Some(&f) => {
+                    let pts = tree.fragment_points(f);
+                    pts.iter().sum::<DVec3>() / pts.len() as f64
+                }
+                None => {
+                    let o = scene.bounds().center();
+                    o - node.plane.normal * node.plane.signed_distance(o)
+                }
+            };
+            let delta = node.plane.normal * (1e-6 * scale);
+            for p in [c + delta, c - delta] {
+                let vp = Viewpoint::Point(p);
+                assert!(vp.side(&node.plane) != 0.0);
+                viewpoints.push(vp);
+            }
+        }
+        for vp in viewpoints {
+            let checked = check_order_invariants(&tree, vp);
+            assert!(checked > 0);
+            // Front to back is exactly the reverse.
+            let mut b2f = tree.paint_order(vp, BspTraversal::BackToFront);
+            b2f.reverse();
+            assert_eq!(b2f, tree.paint_order(vp, BspTraversal::FrontToBack));
+        }
+    }
+}
+
+#[test]
+fn fragments_lie_on_their_side_of_every_ancestor_and_keep_the_area() {
+    let scene = random_triangles(200, 5);
+    let tree = BspTree::build(&scene, &BspOptions::default()).unwrap();
+    // Walk down, remembering the planes above with the side taken.
+    let mut stack = vec![(0u32, Vec::<(usize, bool)>::new())];
+    let mut area_by_face = std::collections::HashMap::<u32, f64>::new();
+    while let Some((n, above)) = stack.pop() {
+        let node = tree.node(n);
+        for &f in tree.node_fragments(n) {
+            let pts = tree.fragment_points(f);
+            *area_by_face.entry(tree.fragment(f).face).or_default() += polygon_area(&pts);
+            for &(a, front) in &above {
+                let anc = tree.node(a as u32);
+                for p in &pts {
+                    let d = anc.plane.signed_distance(*p);
+                    assert!(if front { d >= -anc.eps } else { d <= anc.eps }, "{d}");
+                }
+            }
+        }
+        for (c, front) in [(node.front, true), (node.back, false)] {
+            if let Some(c) = c {
+                let mut a = above.clone();
+                a.push((n as usize, front));
+                stack.push((c, a));
+            }
+        }
+    }
+    for (k, o) in scene.objects().iter().enumerate() {
+        let area = polygon_area(&o.world_polygon(0));
+        let got = area_by_face[&o.first_face];
+        assert!(
+            (got - area).abs() <= 1e-9 * area.max(1.0),
+            "object {k}: {got} vs {area}"
+        );
+    }
+    let s = tree.stats();
+    assert_eq!(s.fragments, s.input_polygons - s.degenerate + s.splits);
+}
+
+#[test]
+fn frames_equal_the_zbuffer_on_the_demo_scene() {
+    let scene = demo::default_scene();
+    let vp = Viewport::new(160, 120).unwrap();
+    let v = view(&scene, &scene.default_camera(vp.aspect()), 160, 120);
+    both_traversals(&v, 0.999, "demo:default");
+}
+
+#[test]
+fn one_tree_serves_many_views_including_orthographic_and_near_plane_crossings() {
+    let scene = demo::default_scene();
+    let tree = BspTree::build(&scene, &BspOptions::default()).unwrap();
+    let cams = [
+        Camera::perspective(
+            DVec3::new(6., 4., 8.),
+            DVec3::new(0., 1., 0.),
+            DVec3::Y,
+            45.,
+            0.5,
+            40.,
+        ),
+        Camera::perspective(
+            DVec3::new(-7., 2., -3.),
+            DVec3::new(0., 1., 0.),
+            DVec3::Y,
+            60.,
+            0.1,
+            40.,
+        ),
+        // Low over the floor, close to the panels: the floor and panels cross the near plane.
+        Camera::perspective(
+            DVec3::new(0.2, 0.5, 4.0),
+            DVec3::new(0., 0.8, 0.),
+            DVec3::Y,
+            70.,
+            0.5,
+            40.,
+        ),
+        Camera::orthographic(
+            DVec3::new(5., 6., 7.),
+            DVec3::new(0., 1., 0.),
+            DVec3::Y,
+            9.,
+            0.1,
+            40.,
+        ),
+        Camera::orthographic(
+            DVec3::new(0., 10., 0.01),
+            DVec3::ZERO,
+            DVec3::Y,
+            12.,
+            0.1,
+            40.,
+        ),
+    ];
+    for (i, cam) in cams.iter().enumerate() {
+        let v = view(&scene, cam, 96, 72);
+        for t in [BspTraversal::BackToFront, BspTraversal::FrontToBack] {
+            let (frame, _) = tree.render(&v, &options(t)).unwrap();
+            assert_like_zbuffer(&frame, &v, 0.999, &format!("camera {i} {}", t.name()));
+        }
+    }
+}
+
+#[test]
+fn frames_equal_the_zbuffer_on_random_triangles() {
+    let scene = random_triangles(150, 3);
+    let cam = Camera::perspective(
+        DVec3::new(3., 4., 16.),
+        DVec3::ZERO,
+        DVec3::Y,
+        55.,
+        0.5,
+        60.,
+    );
+    let v = view(&scene, &cam, 128, 96);
+    both_traversals(&v, 0.999, "random triangles");
+    let cam = Camera::orthographic(
+        DVec3::new(-9., 5., 9.),
+        DVec3::ZERO,
+        DVec3::Y,
+        16.,
+        0.5,
+        60.,
+    );
+    let v = view(&scene, &cam, 128, 96);
+    both_traversals(&v, 0.999, "random triangles, orthographic");
+}
+
+#[test]
+fn interpenetrating_quads_and_coplanar_ties() {
+    let mut s = Scene::new();
+    // Two quads crossing along x = 0.3.
+    s.add(quad_object(
+        "a",
+        [
+            DVec3::new(-1., -1., -1.),
+            DVec3::new(1.6, -1., 1.),
+            DVec3::new(1.6, 1., 1.),
+            DVec3::new(-1., 1., -1.),
+        ],
+    ))
+    .unwrap();
+    s.add(quad_object(
+        "b",
+        [
+            DVec3::new(-1., -0.8, 1.),
+            DVec3::new(1.6, -0.8, -1.),
+            DVec3::new(1.6, 0.8, -1.),
+            DVec3::new(-1., 0.8, 1.),
+        ],
+    ))
+    .unwrap();
+    // Two coplanar overlapping squares facing the camera: the lower id (2) must win.
+    for (name, x) in [("c", -3.0), ("d", -2.5)] {
+        s.add(quad_object(
+            name,
+            [
+                DVec3::new(x, -0.5, 0.),
+                DVec3::new(x + 1., -0.5, 0.),
+                DVec3::new(x + 1., 0.5, 0.),
+                DVec3::new(x, 0.5, 0.),
+            ],
+        ))
+        .unwrap();
+    }
+    let cam = Camera::orthographic(DVec3::new(0., 0., 5.), DVec3::ZERO, DVec3::Y, 3.0, 0.1, 20.);
+    let v = view(&s, &cam, 120, 60);
+    for t in [BspTraversal::BackToFront, BspTraversal::FrontToBack] {
+        let (frame, stats) = bsp::render(&v, &options(t)).unwrap();
+        assert!(stats.get("bsp_splits").unwrap() >= 1.0);
+        assert_like_zbuffer(&frame, &v, 1.0, t.name());
+        // Both squares and both crossing quads are visible.
+        for id in 0..4 {
+            assert!(frame.ids.contains(&id), "{id} not seen");
+        }
+    }
+}
+
+#[test]
+fn front_to_back_stops_once_the_image_is_full() {
+    // A wall filling the view in front of 100 random triangles.
+    let mut scene = random_triangles(100, 8);
+    scene
+        .add(quad_object(
+            "wall",
+            [
+                DVec3::new(-50., -50., 7.),
+                DVec3::new(50., -50., 7.),
+                DVec3::new(50., 50., 7.),
+                DVec3::new(-50., 50., 7.),
+            ],
+        ))
+        .unwrap();
+    let cam = Camera::perspective(
+        DVec3::new(0., 0., 12.),
+        DVec3::ZERO,
+        DVec3::Y,
+        50.,
+        0.5,
+        60.,
+    );
+    let v = view(&scene, &cam, 64, 48);
+    let (f2b, s) = bsp::render(&v, &options(BspTraversal::FrontToBack)).unwrap();
+    assert_eq!(s.get("early_exit"), Some(1.0));
+    assert!(s.get("visited_fraction").unwrap() < 1.0);
+    assert!(f2b.ids.iter().all(|&id| id == 100));
+    let (_, s) = bsp::render(&v, &options(BspTraversal::BackToFront)).unwrap();
+    assert_eq!(s.get("early_exit"), Some(0.0));
+    assert_eq!(s.get("visited_fraction"), Some(1.0));
+}
+
+#[test]
+fn split_weight_trades_splits_for_balance() {
+    let scene = random_triangles(400, 21);
+    let few = BspOptions::default()
+        .with_weights(100.0, 0.0)
+        .with_score_sample(0);
+    let balanced = BspOptions::default()
+        .with_weights(0.0, 1.0)
+        .with_score_sample(0);
+    let a = *BspTree::build(&scene, &few).unwrap().stats();
+    let b = *BspTree::build(&scene, &balanced).unwrap().stats();
+    assert!(a.splits < b.splits, "{} vs {}", a.splits, b.splits);
+    assert!(a.depth > b.depth, "{} vs {}", a.depth, b.depth);
+    // More candidates can only find better-scoring planes at the root.
+    let one = BspOptions::default().with_candidates(1);
+    let c = BspTree::build(&scene, &one).unwrap();
+    assert_eq!(c.stats().input_polygons, 400);
+    // Same seed, same tree; another seed, another tree.
+    let d1 = BspTree::build(&scene, &BspOptions::default()).unwrap();
+    let d2 = BspTree::build(&scene, &BspOptions::default()).unwrap();
+    assert_eq!(d1.stats().splits, d2.stats().splits);
+    assert_eq!(d1.stats().nodes, d2.stats().nodes);
+}
+
+#[test]
+fn stats_are_consistent() {
+    let scene = demo::default_scene();
+    let vp = Viewport::new(80, 60).unwrap();
+    let v = view(&scene, &scene.default_camera(vp.aspect()), 80, 60);
+    let (_, s) = bsp::render(&v, &options(BspTraversal::BackToFront)).unwrap();
+    let g = |k: &str| s.get(k).unwrap();
+    assert_eq!(
+        g("bsp_fragments"),
+        scene.polygon_count() as f64 + g("bsp_splits")
+    );
+    assert!(g("bsp_depth") >= (g("bsp_nodes")).log2().floor() && g("bsp_depth") <= g("bsp_nodes"));
+    assert_eq!(g("fragments_visited"), g("bsp_fragments"));
+    assert!(g("fragments_painted") <= g("fragments_visited") - g("fragments_culled"));
+    // About half the faces of the closed solids are back faces.
+    assert!(g("fragments_culled") > 0.3 * g("bsp_fragments"));
+    assert!(g("build_ms") >= 0.0);
+}
+
+#[test]
+fn bad_and_degenerate_input_gives_background() {
+    let cam = Camera::perspective(DVec3::new(0., 0., 5.), DVec3::ZERO, DVec3::Y, 50., 0.1, 20.);
+    // Empty scene.
+    let empty = Scene::new();
+    let v = view(&empty, &cam, 16, 12);
+    for t in [BspTraversal::BackToFront, BspTraversal::FrontToBack] {
+        let (f, _) = bsp::render(&v, &options(t)).unwrap();
+        assert!(f.ids.iter().all(|&i| i == BACKGROUND));
+    }
+    // A single face.
+    let mut one = Scene::new();
+    one.add(quad_object(
+        "q",
+        [
+            DVec3::new(-1., -1., 0.),
+            DVec3::new(1., -1., 0.),
+            DVec3::new(1., 1., 0.),
+            DVec3::new(-1., 1., 0.),
+        ],
+    ))
+    .unwrap();
+    let v = view(&one, &cam, 16, 12);
+    let (f, s) = bsp::render(&v, &RenderOptions::default()).unwrap();
+    assert_eq!(s.get("bsp_nodes"), Some(1.0));
+    assert_like_zbuffer(&f, &v, 1.0, "single face");
+    // Everything behind the camera.
+    let away = Camera::perspective(
+        DVec3::new(0., 0., 5.),
+        DVec3::new(0., 0., 10.),
+        DVec3::Y,
+        50.,
+        0.1,
+        20.,
+    );
+    let scene = demo::default_scene();
+    let v = view(&scene, &away, 16, 12);
+    let (f, _) = bsp::render(&v, &RenderOptions::default()).unwrap();
+    assert!(f.ids.iter().all(|&i| i == BACKGROUND));
+    // Inside a closed cube: every face is a back face.
+    let cube = demo::cube();
+    let inside = Camera::perspective(
+        DVec3::new(0.1, 0.0, 0.2),
+        DVec3::new(0., 0., -1.),
+        DVec3::Y,
+        60.,
+        0.01,
+        20.,
+    );
+    let v = view(&cube, &inside, 16, 12);
+    for t in [BspTraversal::BackToFront, BspTraversal::FrontToBack] {
+        let (f, _) = bsp::render(&v, &options(t)).unwrap();
+        assert!(f.ids.iter().all(|&i| i == BACKGROUND));
+    }
+    // A mirrored object keeps its front faces.
+    let mut m = Scene::new();
+    m.add(
+        ObjectDesc::new(
+            "mirrored",
+            demo::box_mesh(DVec3::splat(-0.5), DVec3::splat(0.5)),
+        )
+        .with_transform(DMat4::from_scale(DVec3::new(-1., 1., 1.))),
+    )
+    .unwrap();
+    let v = view(
+        &m,
+        &Camera::perspective(
+            DVec3::new(2., 1.5, 3.),
+            DVec3::ZERO,
+            DVec3::Y,
+            50.,
+            0.1,
+            20.,
+        ),
+        40,
+        30,
+    );
+    let (f, _) = bsp::render(&v, &RenderOptions::default()).unwrap();
+    assert!(f.covered_pixels() > 100);
+    assert_like_zbuffer(&f, &v, 1.0, "mirrored");
+    // A tree of another scene is refused.
+    let tree = BspTree::build(&one, &BspOptions::default()).unwrap();
+    let v = view(&scene, &cam, 16, 12);
+    assert!(bsp::render_with_tree(&tree, &v, &RenderOptions::default()).is_err());
+}
+
+#[test]
+fn axis_planes_keep_the_tree_of_a_convex_object_shallow() {
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("sphere", demo::uv_sphere_mesh(1.0, 48, 24)))
+        .unwrap();
+    // 48 x 22 planar quads (two coplanar triangles each) and 2 x 48 pole triangles.
+    let planes = 48 * 22 + 2 * 48;
+    assert_eq!(s.face_count(), 48 * 22 * 2 + 2 * 48);
+    // Every face's plane has the whole sphere behind it: the autopartition is a chain
+    // of one plane per node, without a split.
+    let chain = BspTree::build(&s, &BspOptions::default().with_axis_planes(false)).unwrap();
+    assert_eq!(chain.stats().splits, 0);
+    assert_eq!(chain.stats().depth, planes);
+    let n = planes;
+    let tree = BspTree::build(&s, &BspOptions::default()).unwrap();
+    assert!(tree.stats().depth < n / 10, "depth {}", tree.stats().depth);
+    let empty_nodes = (0..tree.node_count() as u32)
+        .filter(|&i| tree.node_fragments(i).is_empty())
+        .count();
+    assert!(empty_nodes > 0);
+    for vp in [
+        Viewpoint::Point(DVec3::new(0.3, 2.0, 2.5)),
+        Viewpoint::Point(DVec3::new(0.1, -0.2, 0.3)),
+        Viewpoint::Direction(DVec3::new(-1.0, 0.5, 0.2)),
+    ] {
+        assert!(check_order_invariants(&tree, vp) > 0);
+    }
+    let cam = Camera::perspective(
+        DVec3::new(0.5, 1.5, 3.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        50.,
+        0.1,
+        20.,
+    );
+    let v = view(&s, &cam, 80, 60);
+    both_traversals(&v, 1.0, "sphere");
+}
+
+#[test]
+fn front_to_back_skips_hidden_and_offscreen_subtrees_without_changing_the_frame() {
+    // A street view of a city: near buildings hide most of the others.
+    let scene = demo::city(24, 24, 5);
+    let cam = Camera::perspective(
+        DVec3::new(0.2, 0.6, 13.0),
+        DVec3::new(0.0, 0.8, 0.0),
+        DVec3::Y,
+        60.,
+        0.1,
+        80.,
+    );
+    let v = view(&scene, &cam, 160, 90);
+    let (f2b, s) = bsp::render(&v, &options(BspTraversal::FrontToBack)).unwrap();
+    assert!(s.get("subtrees_hidden").unwrap() > 0.0);
+    assert!(s.get("subtrees_outside").unwrap() > 0.0);
+    assert!(s.get("fragments_visited").unwrap() < s.get("bsp_fragments").unwrap());
+    assert_like_zbuffer(&f2b, &v, 1.0, "street view, front to back");
+    let (b2f, s) = bsp::render(&v, &options(BspTraversal::BackToFront)).unwrap();
+    assert_eq!(s.get("subtrees_hidden"), Some(0.0));
+    assert_eq!(s.get("fragments_visited"), s.get("bsp_fragments"));
+    assert_eq!(f2b.ids, b2f.ids);
+}

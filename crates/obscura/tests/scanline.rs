@@ -1,0 +1,357 @@
+//! The scanline algorithm: the z-buffer's frame on every kind of scene, and its own
+//! machinery (active edge list, spans per row, coherence) on scenes worked by hand.
+
+mod hsr_scenes;
+
+use glam::DVec3;
+use hsr_scenes::{Case, scene_of};
+use obscura::scene::Camera;
+use obscura::surface::scanline::{self, SpanDecision};
+use obscura::surface::{Algorithm, RenderOptions};
+use obscura::{BACKGROUND, prepare};
+
+const ALGO: Algorithm = Algorithm::Scanline;
+
+#[test]
+fn random_triangles_match_zbuffer() {
+    hsr_scenes::random_triangles(1, 50, 96, 72).assert_matches_zbuffer(ALGO);
+    hsr_scenes::random_triangles(2, 200, 160, 120).assert_matches_zbuffer(ALGO);
+}
+
+#[test]
+fn thin_triangles_match_zbuffer() {
+    hsr_scenes::thin_triangles(3).assert_matches_zbuffer(ALGO);
+}
+
+#[test]
+fn interpenetrating_faces_match_zbuffer() {
+    let stats = hsr_scenes::interpenetrating().assert_matches_zbuffer(ALGO);
+    // Faces cross inside spans: some spans must be decided pixel by pixel.
+    assert!(stats.get("spans_per_pixel").unwrap() > 0.0);
+}
+
+#[test]
+fn cyclic_overlap_matches_zbuffer() {
+    hsr_scenes::cyclic_overlap().assert_matches_zbuffer(ALGO);
+}
+
+#[test]
+fn coplanar_touching_faces_match_zbuffer() {
+    hsr_scenes::coplanar_touching().assert_matches_zbuffer(ALGO);
+    let stats = hsr_scenes::pixel_aligned_fan().assert_matches_zbuffer(ALGO);
+    // The square's bottom edge lies on a row of samples: there its side edges allow
+    // a span that the bottom edge (not a top-left edge) refuses, and the span check
+    // must fall back to the coverage rule.
+    assert!(stats.get("span_fallbacks").unwrap() >= 1.0);
+}
+
+#[test]
+fn clipped_polygons_match_zbuffer() {
+    let case = hsr_scenes::crossing_near_plane();
+    let view = prepare(&case.scene, &case.camera, case.viewport, &case.prepare).unwrap();
+    let clipped = &view.stats().stages[4];
+    assert!(
+        clipped.output > 0,
+        "the scene must make the pipeline clip faces"
+    );
+    case.assert_matches_zbuffer(ALGO);
+}
+
+#[test]
+fn orthographic_view_matches_zbuffer() {
+    hsr_scenes::orthographic(4).assert_matches_zbuffer(ALGO);
+}
+
+#[test]
+fn demo_default_matches_zbuffer() {
+    hsr_scenes::demo_default(160, 120).assert_matches_zbuffer(ALGO);
+}
+
+#[test]
+fn random_sweep_matches_zbuffer() {
+    for seed in 0..120 {
+        hsr_scenes::random_scene(seed).assert_matches_zbuffer(ALGO);
+    }
+}
+
+#[test]
+fn empty_culled_and_inside_views_are_background() {
+    for case in hsr_scenes::background_cases() {
+        let ((frame, stats), (reference, _)) = case.render_pair(ALGO);
+        assert_eq!(frame.covered_pixels(), 0, "{}", case.name);
+        assert!(frame.depth.iter().all(|d| d.is_infinite()), "{}", case.name);
+        assert_eq!(frame, reference, "{}", case.name);
+        assert_eq!(stats.get("spans"), Some(0.0), "{}", case.name);
+    }
+}
+
+/// Face 0: the square (2,2)-(10,10) in pixels at z = 0. Face 1: the triangle
+/// (6,4) (14,4) (6,8) at z = 1, nearer. Both are seen by an orthographic camera that
+/// maps world units to pixels (pixel (i, j) samples world (i + 0.5, 12 - j - 0.5)).
+fn square_and_triangle() -> Case {
+    let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 12.0 - y, z);
+    let polys = vec![
+        vec![
+            flip(2., 2., 0.),
+            flip(10., 2., 0.),
+            flip(10., 10., 0.),
+            flip(2., 10., 0.),
+        ],
+        vec![flip(6., 4., 1.), flip(14., 4., 1.), flip(6., 8., 1.)],
+    ];
+    let cam = Camera::orthographic(
+        DVec3::new(10.0, 6.0, 10.0),
+        DVec3::new(10.0, 6.0, 0.0),
+        DVec3::Y,
+        12.0,
+        1.0,
+        20.0,
+    );
+    Case::new("square and triangle", scene_of(&polys), cam, 20, 12)
+}
+
+#[test]
+fn active_edge_list_and_spans_of_a_hand_worked_scene() {
+    let case = square_and_triangle();
+    let view = prepare(&case.scene, &case.camera, case.viewport, &case.prepare).unwrap();
+    let (frame, stats, rows) = scanline::trace(&view, &RenderOptions::default(), 0..12).unwrap();
+
+    // Horizontal edges never enter the table: two sides of the square, two of the
+    // triangle.
+    assert_eq!(stats.get("edges"), Some(4.0));
+    assert_eq!(stats.get("max_active_edges"), Some(4.0));
+
+    // Row 1 (y = 1.5) is above everything; rows 2..=9 cross the square, rows 4..=7 the
+    // triangle (its sample lines y = 4.5 .. 7.5).
+    assert!(rows[1].active_edges.is_empty());
+    assert_eq!(rows[1].spans.len(), 1);
+    for r in [2, 3, 8, 9] {
+        assert_eq!(rows[r].active_edges.len(), 2, "row {r}");
+        assert_eq!(rows[r].spans.len(), 3, "row {r}");
+    }
+
+    // Row 5: the triangle's slanted edge runs from (14,4) to (6,8): 1/m = -2, and at
+    // y = 5.5 it is at x = 11, so pixels 6..=10 are in the triangle.
+    let r5 = &rows[5];
+    let edges: Vec<(u32, bool, u32)> = r5
+        .active_edges
+        .iter()
+        .map(|e| (e.face, e.left, e.crossing))
+        .collect();
+    assert_eq!(
+        edges,
+        vec![(0, true, 2), (1, true, 6), (0, false, 10), (1, false, 11)]
+    );
+    let slanted = &r5.active_edges[3];
+    assert_eq!(
+        (
+            slanted.y_min,
+            slanted.x,
+            slanted.y_max,
+            slanted.inverse_slope
+        ),
+        (4.0, 11.0, 8.0, -2.0)
+    );
+    let spans: Vec<(u32, u32, Vec<u32>)> = r5
+        .spans
+        .iter()
+        .map(|s| (s.x0, s.x1, s.faces.clone()))
+        .collect();
+    assert_eq!(
+        spans,
+        vec![
+            (0, 2, vec![]),
+            (2, 6, vec![0]),
+            (6, 10, vec![0, 1]),
+            (10, 11, vec![1]),
+            (11, 20, vec![]),
+        ]
+    );
+    // Rows 6 and 7: the triangle ends at x = 9 and 7, inside the square.
+    for (r, end) in [(6, 9), (7, 7)] {
+        let s: Vec<(u32, u32, usize)> = rows[r]
+            .spans
+            .iter()
+            .map(|s| (s.x0, s.x1, s.faces.len()))
+            .collect();
+        assert_eq!(
+            s,
+            vec![(0, 2, 0), (2, 6, 1), (6, end, 2), (end, 10, 1), (10, 20, 0)],
+            "row {r}"
+        );
+    }
+
+    // The overlap is decided at its ends on rows 4 and 5 (where the order is also
+    // proven fixed), then reused by coherence on rows 6 and 7.
+    let overlap: Vec<SpanDecision> = (4..8)
+        .map(|r| {
+            rows[r]
+                .spans
+                .iter()
+                .find(|s| s.faces.len() == 2)
+                .unwrap()
+                .decision
+        })
+        .collect();
+    assert_eq!(
+        overlap,
+        vec![
+            SpanDecision::NearestAtEnds,
+            SpanDecision::NearestAtEnds,
+            SpanDecision::Coherence,
+            SpanDecision::Coherence
+        ]
+    );
+    assert_eq!(stats.get("spans_by_coherence"), Some(2.0));
+    // Each reuse skips finding the nearest of 2 faces (1) and checking it at both ends (2).
+    assert_eq!(stats.get("comparisons_skipped_by_coherence"), Some(6.0));
+    // Single-face spans: 8 rows of the square alone or with the triangle's side spans.
+    let single: usize = rows
+        .iter()
+        .flat_map(|r| &r.spans)
+        .filter(|s| s.decision == SpanDecision::SingleFace)
+        .count();
+    assert_eq!(stats.get("spans_without_comparison"), Some(single as f64));
+    assert_eq!(single, 4 + 2 * 4); // rows 2,3,8,9: one; rows 4..=7: two
+
+    // The picture: the triangle over the square.
+    assert_eq!(frame.id(7, 5), 1);
+    assert_eq!(frame.id(10, 5), 1);
+    assert_eq!(frame.id(11, 5), BACKGROUND);
+    assert_eq!(frame.id(9, 6), 0);
+    assert_eq!(frame.id(3, 3), 0);
+    hsr_scenes::assert_same(
+        &case.name,
+        ALGO,
+        &frame,
+        &obscura::render(Algorithm::ZBuffer, &view, &RenderOptions::default())
+            .unwrap()
+            .0,
+    );
+}
+
+#[test]
+fn coherence_skips_comparisons_on_repeated_rows() {
+    // Three stacked rectangles over 40 identical rows: on each row the spans with two
+    // and three faces are decided at their ends twice (first row, then the row that
+    // proves the order), and reused on the 38 rows after.
+    let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 48.0 - y, z);
+    let rect = |x0: f64, x1: f64, z: f64| {
+        vec![
+            flip(x0, 4., z),
+            flip(x1, 4., z),
+            flip(x1, 44., z),
+            flip(x0, 44., z),
+        ]
+    };
+    let polys = vec![rect(2., 30., 0.), rect(10., 40., 1.), rect(20., 50., 2.)];
+    let cam = Camera::orthographic(
+        DVec3::new(32.0, 24.0, 10.0),
+        DVec3::new(32.0, 24.0, 0.0),
+        DVec3::Y,
+        48.0,
+        1.0,
+        20.0,
+    );
+    let case = Case::new("stacked rectangles", scene_of(&polys), cam, 64, 48);
+    let stats = case.assert_matches_zbuffer(ALGO);
+    // Per row: [10,20) {0,1}, [20,30) {0,1,2}, [30,40) {1,2}: three multi-face spans.
+    assert_eq!(stats.get("spans_decided_at_ends"), Some(3.0 * 2.0));
+    assert_eq!(stats.get("spans_by_coherence"), Some(3.0 * 38.0));
+    // Skipped per reuse: 3 (k - 1) for k faces: 3 + 6 + 3.
+    assert_eq!(
+        stats.get("comparisons_skipped_by_coherence"),
+        Some(12.0 * 38.0)
+    );
+    assert_eq!(stats.get("spans_without_comparison"), Some(2.0 * 40.0));
+    assert_eq!(stats.get("spans"), Some(5.0 * 40.0));
+}
+
+#[test]
+fn coherence_is_not_used_when_faces_interpenetrate() {
+    // Two rectangles over the same rows whose depths cross at x = 20: the order
+    // changes inside the span, so it can never be reused.
+    let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 32.0 - y, z);
+    let polys = vec![
+        vec![
+            flip(4., 4., 0.),
+            flip(36., 4., 0.),
+            flip(36., 28., 0.),
+            flip(4., 28., 0.),
+        ],
+        vec![
+            flip(4., 4., -1.),
+            flip(36., 4., 1.),
+            flip(36., 28., 1.),
+            flip(4., 28., -1.),
+        ],
+    ];
+    let cam = Camera::orthographic(
+        DVec3::new(20.0, 16.0, 10.0),
+        DVec3::new(20.0, 16.0, 0.0),
+        DVec3::Y,
+        32.0,
+        1.0,
+        20.0,
+    );
+    let case = Case::new("crossing rectangles", scene_of(&polys), cam, 40, 32);
+    let stats = case.assert_matches_zbuffer(ALGO);
+    assert_eq!(stats.get("spans_by_coherence"), Some(0.0));
+    assert_eq!(stats.get("orders_proven"), Some(0.0));
+    assert_eq!(stats.get("spans_per_pixel"), Some(24.0));
+    let ((frame, _), _) = case.render_pair(ALGO);
+    // Left of x = 20 the flat one (face 0) is nearer, right of it the tilted one.
+    assert_eq!(frame.id(10, 10), 0);
+    assert_eq!(frame.id(30, 10), 1);
+}
+
+#[test]
+fn degenerate_polygons_are_skipped_without_panic() {
+    // A zero-area triangle (collinear) and a triangle smaller than a pixel between
+    // samples: neither covers anything.
+    let polys = vec![
+        vec![
+            DVec3::new(-1., 0., 0.),
+            DVec3::new(0., 0., 0.),
+            DVec3::new(1., 0., 0.),
+        ],
+        vec![
+            DVec3::new(0.001, 0.001, 0.),
+            DVec3::new(0.002, 0.001, 0.),
+            DVec3::new(0.001, 0.002, 0.),
+        ],
+    ];
+    let cam = Camera::perspective(
+        DVec3::new(0., 0., 4.),
+        DVec3::ZERO,
+        DVec3::Y,
+        50.0,
+        0.5,
+        20.0,
+    );
+    let case = Case::new("degenerate", scene_of(&polys), cam, 8, 6);
+    let stats = case.assert_matches_zbuffer(ALGO);
+    assert_eq!(stats.get("spans"), Some(0.0));
+}
+
+#[test]
+fn a_single_face_is_drawn_without_any_depth_comparison() {
+    // A triangle (2,1) (13,4) (5,10) in pixels: every span holds that one face.
+    let flip = |x: f64, y: f64| DVec3::new(x, 12.0 - y, 0.0);
+    let polys = vec![vec![flip(2.0, 1.0), flip(13.0, 4.0), flip(5.0, 10.0)]];
+    let cam = Camera::orthographic(
+        DVec3::new(8.0, 6.0, 10.0),
+        DVec3::new(8.0, 6.0, 0.0),
+        DVec3::Y,
+        12.0,
+        1.0,
+        20.0,
+    );
+    let case = Case::new("single triangle", scene_of(&polys), cam, 16, 12);
+    let stats = case.assert_matches_zbuffer(ALGO);
+    // Rows 1..=9 (sample lines 1.5 .. 9.5) each hold one span of the triangle.
+    assert_eq!(stats.get("spans"), Some(9.0));
+    assert_eq!(stats.get("spans_without_comparison"), Some(9.0));
+    assert_eq!(stats.get("depth_comparisons"), Some(0.0));
+    assert_eq!(stats.get("edges"), Some(3.0));
+}
