@@ -294,14 +294,6 @@ pub fn render(
     Ok((frame, stats))
 }
 
-/// The error of an algorithm that is not available yet.
-// Unused once every algorithm has landed (ray casting was the last placeholder on this
-// branch); kept while other branches may still have placeholders.
-#[allow(dead_code)]
-pub(crate) fn not_yet(algorithm: Algorithm) -> Error {
-    Error::option("--algo", format!("{algorithm} is not implemented yet"))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
