@@ -5,11 +5,15 @@
 //! rounding. Epsilons are documented where they are used.
 
 mod aabb;
+pub mod kdop;
+pub mod obb;
 mod plane;
 mod polygon;
 mod sphere;
 
 pub use aabb::Aabb;
+pub use kdop::{Kdop, KdopKind, RaySlabs};
+pub use obb::Obb;
 pub use plane::{Plane, PlaneSide};
 pub use polygon::{
     is_convex, max_plane_deviation, newell_normal, polygon_area, polygon_centroid, triangulate,

@@ -294,11 +294,6 @@ pub fn render(
     Ok((frame, stats))
 }
 
-/// The error of an algorithm that is not available yet.
-pub(crate) fn not_yet(algorithm: Algorithm) -> Error {
-    Error::option("--algo", format!("{algorithm} is not implemented yet"))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

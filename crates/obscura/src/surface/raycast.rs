@@ -1,7 +1,66 @@
-//! Placeholder: being implemented.
+//! Ray casting: one ray per pixel centre, the nearest face it hits — four ways.
+//!
+//! Sources: seed 000 "Αλγόριθμος Εκπομπής Ακτίνων (1)-(2)" (for each pixel a ray from
+//! the viewpoint; the nearest of its intersections with all primitives is the visible
+//! one; O(pP)), "Περιβάλλοντες Όγκοι (1)-(7)" and "Υποδιαίρεση Χώρου"; seed 002 "Ray
+//! Casting" (bounding volumes, hierarchies, a uniform grid walked front to back).
+//!
+//! # The independent check
+//! Rays are generated from the [`Camera`](crate::Camera) in world space
+//! ([`crate::scene::Camera::ray`] through `(i + 0.5, j + 0.5)`), not from the prepared
+//! view's screen polygons: the scene's world-space triangles, the camera and the back-
+//! face rule are all this module uses of the [`PreparedView`], so agreeing with the
+//! z-buffer checks the whole pipeline (transforms, clipping, projection, coverage).
+//!
+//! - Perspective rays have `direction · forward = 1`, so the ray parameter `t` *is* the
+//!   eye-space depth; orthographic rays start on the eye plane with the unit forward
+//!   direction. Hits are accepted for `near <= t <= far` (the clipping planes).
+//! - Back faces: on objects whose back faces the view culls
+//!   ([`BackfaceMode::applies_to`](crate::cull::backface::BackfaceMode::applies_to)),
+//!   faces whose world-space normal points away from the viewer are ignored, with the
+//!   pipeline's formula (edge-on counts as back).
+//! - Ties: nearer wins; at exactly the same `t` the lower face id.
+//! - Faces are fan-triangulated; the watertight `f64` test
+//!   ([`crate::accel::triangles`]) decides rays through edges by the top-left rule, so
+//!   no ray slips between two triangles and pixel centres exactly on an edge go to the
+//!   same face as in the z-buffer.
+//!
+//! # The four accelerations
+//! | variant | per ray | stats |
+//! | --- | --- | --- |
+//! | [`Acceleration::BruteForce`] | every triangle (the seeds' `RayCasting`) | triangle tests |
+//! | [`Acceleration::Bounds`] | each object's bounding volume, then the triangles of the objects hit, nearest volume first, stopping at a volume behind the nearest hit | bound tests and hits, tests saved |
+//! | [`Acceleration::Bvh`] | [`crate::accel::bvh`]: binned-SAH hierarchy, ordered traversal | build, nodes, depth, Mrays/s |
+//! | [`Acceleration::Grid`] | [`crate::accel::grid`]: uniform grid, 3D-DDA, hits accepted only in the current cell | cells, refs, cells per ray |
+//!
+//! All four run the same exact test on the same triangles, so they return the same
+//! frame; they differ only in how many tests they need.
+//!
+//! - Input: a [`PreparedView`] (for its scene, camera, viewport and back-face mode).
+//!   Output: a [`Frame`] (face id and eye-space depth `t` as `f32`) and [`Stats`].
+//! - Complexity: brute force O(p T) for p pixels and T triangles; bounds O(p (K + T_hit))
+//!   for K objects; BVH about O(p log T); grid O(p (cells per ray + refs per cell)).
+//! - Order and parallelism: pixels are traced in 8x8 tiles (neighbouring rays visit the
+//!   same nodes and triangles, which stay in cache); bands of 8 rows are the unit of
+//!   work, run on rayon's current pool with the `parallel` feature (the CLI's
+//!   `--threads`; 1 is single-threaded), sequentially without it.
+//! - Limitations: one sample per pixel (no anti-aliasing); the depth is the hit's `t`,
+//!   not the rasterizers' interpolated key, so depths agree with the z-buffer's to
+//!   `f32` rounding, not bit for bit.
 
-use crate::geom::BoundsKind;
-use crate::surface::{Algorithm, RenderOptions, Stats};
+use std::ops::AddAssign;
+use std::time::Instant;
+
+use glam::DVec3;
+
+use crate::accel::bvh::traverse::{TraceCounters, TraversalStack};
+use crate::accel::bvh::{Bvh, BvhOptions};
+use crate::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
+use crate::accel::triangles::{
+    AxisOrder, ClosestHit, HitContext, PrimaryRays, SceneTriangles, WatertightRay, WithAxisOrder,
+};
+use crate::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb, RaySlabs, Sphere};
+use crate::surface::{RenderOptions, Stats};
 use crate::view::PreparedView;
 use crate::{Frame, Result};
 
@@ -18,11 +77,587 @@ pub enum Acceleration {
     Grid,
 }
 
+/// What the rays did, summed over all of them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounters {
+    /// Rays cast.
+    pub rays: u64,
+    /// Rays that hit a face.
+    pub hits: u64,
+    /// Bounding volumes tested (bounds variant), or BVH nodes visited.
+    pub bound_tests: u64,
+    /// Bounding volumes a ray met (bounds variant).
+    pub bound_hits: u64,
+    /// Exact triangle tests.
+    pub triangle_tests: u64,
+    /// Grid cells visited.
+    pub cells: u64,
+    /// Grid hits whose point is not inside the cell that accepted them (must stay 0).
+    pub hits_outside_cell: u64,
+    /// Grid tests answered by the mailbox.
+    pub mailbox_hits: u64,
+}
+
+impl AddAssign for RayCounters {
+    fn add_assign(&mut self, o: Self) {
+        self.rays += o.rays;
+        self.hits += o.hits;
+        self.bound_tests += o.bound_tests;
+        self.bound_hits += o.bound_hits;
+        self.triangle_tests += o.triangle_tests;
+        self.cells += o.cells;
+        self.hits_outside_cell += o.hits_outside_cell;
+        self.mailbox_hits += o.mailbox_hits;
+    }
+}
+
 /// Renders by casting one ray per pixel from the camera in world space.
 pub fn render(
-    _view: &PreparedView<'_>,
-    _acceleration: Acceleration,
-    _options: &RenderOptions,
+    view: &PreparedView<'_>,
+    acceleration: Acceleration,
+    options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
-    Err(super::not_yet(Algorithm::Raycast))
+    let start = Instant::now();
+    let triangles = SceneTriangles::new(view.scene());
+    let soup_ms = ms_since(start);
+    let (frame, mut stats) = match acceleration {
+        Acceleration::BruteForce => render_brute_force(view, &triangles, options),
+        Acceleration::Bounds(kind) => render_bounds(view, &triangles, kind, options),
+        Acceleration::Bvh => {
+            let bvh = Bvh::build(&triangles, &BvhOptions::default());
+            render_bvh(view, &triangles, &bvh, options)
+        }
+        Acceleration::Grid => {
+            let grid = UniformGrid::build(&triangles, &GridOptions::default());
+            render_grid(view, &triangles, &grid, options)
+        }
+    }?;
+    stats.set("triangles_ms", soup_ms);
+    Ok((frame, stats))
+}
+
+/// Brute force: every ray against every triangle (seed 000's `RayCasting`).
+pub fn render_brute_force(
+    view: &PreparedView<'_>,
+    triangles: &SceneTriangles,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    struct Run<'a, 'b> {
+        ctx: &'a HitContext<'b>,
+        triangles: &'a SceneTriangles,
+        far: f64,
+        counters: &'a mut RayCounters,
+    }
+    impl WithAxisOrder for Run<'_, '_> {
+        type Output = ClosestHit;
+        fn run<O: AxisOrder>(self) -> ClosestHit {
+            let mut closest = ClosestHit::new(self.far);
+            for (tri, &poly) in self
+                .triangles
+                .vertices()
+                .iter()
+                .zip(self.triangles.triangle_polygons())
+            {
+                self.counters.triangle_tests +=
+                    u64::from(self.ctx.test::<O>(tri, poly, self.far, &mut closest));
+            }
+            closest
+        }
+    }
+    let setup = Setup::new(view, triangles);
+    let start = Instant::now();
+    let (frame, counters) = setup.cast(options, |ctx, counters| {
+        ctx.ray.dispatch(Run {
+            ctx,
+            triangles,
+            far: setup.rays.far,
+            counters,
+        })
+    })?;
+    let mut stats = setup.stats(&counters, ms_since(start));
+    stats.set(
+        "triangle_tests_per_ray",
+        per(counters.triangle_tests, counters.rays),
+    );
+    Ok((frame, stats))
+}
+
+/// A bounding volume of one object, grown by a small margin so rounding in its ray
+/// test cannot lose a hit on a triangle that touches it.
+#[derive(Clone, Copy, Debug)]
+enum ObjectBound {
+    Sphere(Sphere),
+    Aabb(Aabb),
+    Obb(Obb),
+    Kdop(Kdop),
+}
+
+impl ObjectBound {
+    fn new(kind: BoundsKind, points: &[DVec3], margin: f64) -> Option<Self> {
+        Some(match kind {
+            BoundsKind::Sphere => {
+                let s = Sphere::bounding(points)?;
+                ObjectBound::Sphere(Sphere {
+                    center: s.center,
+                    radius: s.radius + margin,
+                })
+            }
+            BoundsKind::Aabb => {
+                let b = Aabb::from_points(points.iter().copied());
+                if b.is_empty() {
+                    return None;
+                }
+                ObjectBound::Aabb(Aabb {
+                    min: b.min - DVec3::splat(margin),
+                    max: b.max + DVec3::splat(margin),
+                })
+            }
+            BoundsKind::Obb => ObjectBound::Obb(Obb::from_points(points)?.expanded(margin)),
+            BoundsKind::Kdop => {
+                ObjectBound::Kdop(Kdop::from_points(points, KdopKind::K26)?.expanded(margin))
+            }
+        })
+    }
+
+    /// The ray's interval inside the volume; `slabs` are the ray's projections on the
+    /// k-DOP directions (the first three are the axes), computed once per ray.
+    fn interval(&self, o: DVec3, d: DVec3, slabs: &RaySlabs) -> Option<(f64, f64)> {
+        match self {
+            ObjectBound::Sphere(s) => ray_sphere(s, o, d),
+            ObjectBound::Aabb(b) => {
+                let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+                for k in 0..3 {
+                    if !slabs.clip(k, b.min[k], b.max[k], &mut t0, &mut t1) {
+                        return None;
+                    }
+                }
+                Some((t0, t1))
+            }
+            ObjectBound::Obb(b) => b.ray_interval(o, d),
+            ObjectBound::Kdop(k) => k.ray_interval_projected(slabs),
+        }
+    }
+}
+
+/// The interval where the ray is inside the sphere: the distance from the centre to the
+/// ray compared with the radius (seed 002, "distanza di un punto da una retta").
+fn ray_sphere(s: &Sphere, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+    let dd = d.length_squared();
+    let oc = o - s.center;
+    let t_mid = -oc.dot(d) / dd;
+    let closest = oc + d * t_mid;
+    let gap = s.radius * s.radius - closest.length_squared();
+    if !(gap >= 0.0) {
+        return None;
+    }
+    let half = (gap / dd).sqrt();
+    Some((t_mid - half, t_mid + half))
+}
+
+/// Per-object bounding volumes tested first (seed 000 "Περιβάλλοντες Όγκοι (1)-(4)",
+/// seed 002 "Ottimizzazione dei calcoli di intersezione"): a ray that misses an
+/// object's volume cannot hit the object. The objects whose volume it meets are tested
+/// nearest volume first, and the search stops at a volume that starts behind the
+/// nearest hit found.
+pub fn render_bounds(
+    view: &PreparedView<'_>,
+    triangles: &SceneTriangles,
+    kind: BoundsKind,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    struct Run<'a, 'b> {
+        ctx: &'a HitContext<'b>,
+        triangles: &'a SceneTriangles,
+        bounds: &'a [(u32, ObjectBound)],
+        candidates: &'a mut Vec<(f64, u32)>,
+        far: f64,
+        counters: &'a mut RayCounters,
+    }
+    impl WithAxisOrder for Run<'_, '_> {
+        type Output = ClosestHit;
+        fn run<O: AxisOrder>(self) -> ClosestHit {
+            let (o, d) = (self.ctx.ray.origin, self.ctx.ray.direction);
+            let slabs = RaySlabs::new(o, d);
+            self.candidates.clear();
+            for &(k, ref b) in self.bounds {
+                self.counters.bound_tests += 1;
+                if let Some((t0, t1)) = b.interval(o, d, &slabs)
+                    && t1 >= self.ctx.t_min
+                    && t0 <= self.far
+                {
+                    self.counters.bound_hits += 1;
+                    self.candidates.push((t0.max(self.ctx.t_min), k));
+                }
+            }
+            self.candidates.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+            let mut closest = ClosestHit::new(self.far);
+            let (verts, polys) = (
+                self.triangles.vertices(),
+                self.triangles.triangle_polygons(),
+            );
+            for &(t0, k) in self.candidates.iter() {
+                if t0 > closest.t {
+                    break;
+                }
+                let range = self.triangles.object_triangles()[k as usize].clone();
+                let range = range.start as usize..range.end as usize;
+                for (tri, &poly) in verts[range.clone()].iter().zip(&polys[range]) {
+                    self.counters.triangle_tests +=
+                        u64::from(self.ctx.test::<O>(tri, poly, self.far, &mut closest));
+                }
+            }
+            closest
+        }
+    }
+    let setup = Setup::new(view, triangles);
+    let build = Instant::now();
+    let margin = 1e-9 * setup.scale.max(f64::MIN_POSITIVE);
+    let mut points: Vec<DVec3> = Vec::new();
+    let bounds: Vec<(u32, ObjectBound)> = triangles
+        .object_triangles()
+        .iter()
+        .enumerate()
+        .filter_map(|(k, range)| {
+            points.clear();
+            points.extend(
+                triangles.vertices()[range.start as usize..range.end as usize]
+                    .iter()
+                    .flatten(),
+            );
+            ObjectBound::new(kind, &points, margin).map(|b| (k as u32, b))
+        })
+        .collect();
+    let build_ms = ms_since(build);
+    let start = Instant::now();
+    let (frame, counters) = setup.cast_bands(options, |band, counters| {
+        let mut candidates: Vec<(f64, u32)> = Vec::with_capacity(bounds.len());
+        setup.cast_band(band, counters, |ctx, counters| {
+            ctx.ray.dispatch(Run {
+                ctx,
+                triangles,
+                bounds: &bounds,
+                candidates: &mut candidates,
+                far: setup.rays.far,
+                counters,
+            })
+        })
+    })?;
+    let mut stats = setup.stats(&counters, ms_since(start));
+    let brute = counters.rays * setup.front_triangles;
+    stats.set("bounds_build_ms", build_ms);
+    stats.set("objects", bounds.len() as f64);
+    stats.set("bound_tests", counters.bound_tests as f64);
+    stats.set("bound_hits", counters.bound_hits as f64);
+    stats.set("triangle_tests", counters.triangle_tests as f64);
+    stats.set("triangle_tests_brute_force", brute as f64);
+    stats.set(
+        "triangle_tests_saved",
+        brute.saturating_sub(counters.triangle_tests) as f64,
+    );
+    stats.set(
+        "saved_fraction",
+        if brute == 0 {
+            0.0
+        } else {
+            1.0 - counters.triangle_tests as f64 / brute as f64
+        },
+    );
+    Ok((frame, stats))
+}
+
+/// Through a bounding-volume hierarchy built beforehand from the same triangles (so one
+/// build serves many views).
+pub fn render_bvh(
+    view: &PreparedView<'_>,
+    triangles: &SceneTriangles,
+    bvh: &Bvh,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    let setup = Setup::new(view, triangles);
+    let start = Instant::now();
+    let (frame, counters) = setup.cast_bands(options, |band, counters| {
+        let mut stack = TraversalStack::default();
+        setup.cast_band(band, counters, |ctx, counters| {
+            let mut c = TraceCounters::default();
+            let hit = bvh.closest_hit(ctx, setup.rays.far, &mut stack, &mut c);
+            counters.bound_tests += c.nodes;
+            counters.triangle_tests += c.triangles;
+            hit
+        })
+    })?;
+    let mut stats = setup.stats(&counters, ms_since(start));
+    let b = bvh.stats();
+    stats.set("build_ms", b.build_ms);
+    stats.set("binary_nodes", b.binary_nodes as f64);
+    stats.set("binary_depth", b.binary_depth as f64);
+    stats.set("nodes", b.nodes as f64);
+    stats.set("leaves", b.leaves as f64);
+    stats.set("depth", b.depth as f64);
+    stats.set("sah_cost", b.sah_cost);
+    stats.set(
+        "node_visits_per_ray",
+        per(counters.bound_tests, counters.rays),
+    );
+    stats.set(
+        "triangle_tests_per_ray",
+        per(counters.triangle_tests, counters.rays),
+    );
+    Ok((frame, stats))
+}
+
+/// Through a uniform grid built beforehand from the same triangles.
+pub fn render_grid(
+    view: &PreparedView<'_>,
+    triangles: &SceneTriangles,
+    grid: &UniformGrid,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    let setup = Setup::new(view, triangles);
+    let start = Instant::now();
+    let (frame, counters) = setup.cast_bands(options, |band, counters| {
+        let mut mailbox = Mailbox::new(triangles);
+        setup.cast_band(band, counters, |ctx, counters| {
+            let mut c = GridCounters::default();
+            let out = grid.closest_hit(triangles, ctx, setup.rays.far, &mut mailbox, &mut c);
+            counters.cells += c.cells;
+            counters.triangle_tests += c.triangles;
+            counters.mailbox_hits += c.mailbox_hits;
+            if let Some(cell) = out.cell {
+                // The seed's rule, checked independently of the traversal's parameters:
+                // the accepted point must lie in the accepted cell.
+                let (lo, hi) = grid.cell_box(cell);
+                let p = ctx.ray.origin + ctx.ray.direction * out.hit.t;
+                let tol = (hi - lo) * 1e-6 + p.abs() * 1e-12;
+                if !(p.cmpge(lo - tol).all() && p.cmple(hi + tol).all()) {
+                    counters.hits_outside_cell += 1;
+                }
+            }
+            out.hit
+        })
+    })?;
+    let mut stats = setup.stats(&counters, ms_since(start));
+    let g = grid.stats();
+    let [nx, ny, nz] = grid.resolution();
+    stats.set("build_ms", g.build_ms);
+    stats.set("cells", g.cells as f64);
+    stats.set("resolution_x", f64::from(nx));
+    stats.set("resolution_y", f64::from(ny));
+    stats.set("resolution_z", f64::from(nz));
+    stats.set("refs", g.refs as f64);
+    stats.set("refs_per_cell", per(g.refs as u64, g.cells as u64));
+    stats.set("empty_cells", g.empty_cells as f64);
+    stats.set("cells_per_ray", per(counters.cells, counters.rays));
+    stats.set(
+        "triangle_tests_per_ray",
+        per(counters.triangle_tests, counters.rays),
+    );
+    stats.set("mailbox_hits", counters.mailbox_hits as f64);
+    stats.set("hits_outside_cell", counters.hits_outside_cell as f64);
+    Ok((frame, stats))
+}
+
+/// Pixels are traced in square tiles of this side (bands of this many rows are the
+/// unit of parallel work).
+const TILE: usize = 8;
+
+/// What every variant shares for one view: rays, ignored polygons, face ids.
+struct Setup<'a> {
+    rays: PrimaryRays,
+    /// The window coordinate of each column's centre.
+    window_x: Vec<f64>,
+    ignored: Vec<bool>,
+    faces: &'a [u32],
+    width: usize,
+    height: usize,
+    viewport: crate::Viewport,
+    front_triangles: u64,
+    scale: f64,
+    triangle_count: usize,
+}
+
+impl<'a> Setup<'a> {
+    fn new(view: &PreparedView<'_>, triangles: &'a SceneTriangles) -> Self {
+        let camera = view.camera();
+        let ignored = triangles.ignored_polygons(view.scene(), camera, view.options().backface);
+        let front_triangles = triangles
+            .triangle_polygons()
+            .iter()
+            .filter(|&&p| !ignored[p as usize])
+            .count() as u64;
+        let b = triangles.bounds();
+        let scale = if b.is_empty() {
+            1.0
+        } else {
+            b.min.abs().max(b.max.abs()).max_element() + b.extent().max_element()
+        };
+        let vp = view.viewport();
+        let rays = PrimaryRays::new(camera, vp);
+        Setup {
+            window_x: (0..vp.width)
+                .map(|i| rays.window_x(f64::from(i) + 0.5))
+                .collect(),
+            rays,
+            ignored,
+            faces: triangles.polygon_faces(),
+            width: vp.width as usize,
+            height: vp.height as usize,
+            viewport: vp,
+            front_triangles,
+            scale,
+            triangle_count: triangles.len(),
+        }
+    }
+
+    /// Casts every pixel's ray with `trace`.
+    fn cast<F>(&self, options: &RenderOptions, trace: F) -> Result<(Frame, RayCounters)>
+    where
+        F: Fn(&HitContext<'_>, &mut RayCounters) -> ClosestHit + Sync,
+    {
+        self.cast_bands(options, |band, counters| {
+            self.cast_band(band, counters, &trace);
+        })
+    }
+
+    /// Fills one band of rows, tile by tile: `band = (first row, ids, depth)`.
+    /// Tiles of [`TILE`] x [`TILE`] pixels keep consecutive rays close in both
+    /// directions, so the nodes and triangles they visit stay in the cache.
+    fn cast_band<F>(
+        &self,
+        band: (usize, &mut [u32], &mut [f32]),
+        counters: &mut RayCounters,
+        mut trace: F,
+    ) where
+        F: FnMut(&HitContext<'_>, &mut RayCounters) -> ClosestHit,
+    {
+        let (j0, ids, depth) = band;
+        let w = self.width;
+        let rows = ids.len() / w.max(1);
+        let tie = self.rays.tie_rule();
+        for x0 in (0..w).step_by(TILE) {
+            let x1 = (x0 + TILE).min(w);
+            for r in 0..rows {
+                let sy = self.rays.window_y((j0 + r) as f64 + 0.5);
+                for i in x0..x1 {
+                    let (origin, direction) = self.rays.ray_at(self.window_x[i], sy);
+                    counters.rays += 1;
+                    let Some(ray) = WatertightRay::new(origin, direction) else {
+                        continue;
+                    };
+                    let ctx = HitContext {
+                        ray,
+                        ignored: &self.ignored,
+                        faces: self.faces,
+                        t_min: self.rays.near,
+                        tie,
+                    };
+                    let hit = trace(&ctx, counters);
+                    if hit.is_hit() {
+                        counters.hits += 1;
+                        ids[r * w + i] = hit.face;
+                        depth[r * w + i] = hit.t as f32;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Runs `band` on every band of [`TILE`] rows of a new frame, in parallel when the
+    /// `parallel` feature is on, summing the counters.
+    fn cast_bands<F>(&self, options: &RenderOptions, band: F) -> Result<(Frame, RayCounters)>
+    where
+        F: Fn((usize, &mut [u32], &mut [f32]), &mut RayCounters) + Sync,
+    {
+        let mut frame = Frame::new(self.viewport)?;
+        let (w, h) = (self.width, self.height);
+        let bands = h.div_ceil(TILE);
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let step = (bands / 50).max(1);
+        let one = |b: usize, ids: &mut [u32], depth: &mut [f32]| {
+            let mut c = RayCounters::default();
+            band((b * TILE, ids, depth), &mut c);
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if n.is_multiple_of(step) {
+                options.report(n as f64 / bands as f64);
+            }
+            c
+        };
+        #[cfg(feature = "parallel")]
+        let counters = {
+            use rayon::prelude::*;
+            frame
+                .ids
+                .par_chunks_mut(w * TILE)
+                .zip(frame.depth.par_chunks_mut(w * TILE))
+                .enumerate()
+                .map(|(b, (ids, depth))| one(b, ids, depth))
+                .reduce(RayCounters::default, |mut a, b| {
+                    a += b;
+                    a
+                })
+        };
+        #[cfg(not(feature = "parallel"))]
+        let counters = {
+            let mut total = RayCounters::default();
+            for (b, (ids, depth)) in frame
+                .ids
+                .chunks_mut(w * TILE)
+                .zip(frame.depth.chunks_mut(w * TILE))
+                .enumerate()
+            {
+                total += one(b, ids, depth);
+            }
+            total
+        };
+        options.report(1.0);
+        Ok((frame, counters))
+    }
+
+    /// The stats every variant reports.
+    fn stats(&self, c: &RayCounters, trace_ms: f64) -> Stats {
+        let mut s = Stats::default();
+        s.set("triangles", self.triangle_count as f64);
+        s.set("front_triangles", self.front_triangles as f64);
+        s.set("rays", c.rays as f64);
+        s.set("hits", c.hits as f64);
+        s.set("triangle_tests", c.triangle_tests as f64);
+        s.set("trace_ms", trace_ms);
+        s.set(
+            "mrays_per_s",
+            if trace_ms > 0.0 {
+                c.rays as f64 / trace_ms / 1e3
+            } else {
+                0.0
+            },
+        );
+        s
+    }
+}
+
+fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+fn per(a: u64, b: u64) -> f64 {
+    if b == 0 { 0.0 } else { a as f64 / b as f64 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ray_sphere_interval_is_analytic() {
+        let s = Sphere {
+            center: DVec3::new(0.0, 0.0, -5.0),
+            radius: 2.0,
+        };
+        let (t0, t1) = ray_sphere(&s, DVec3::ZERO, -DVec3::Z * 2.0).unwrap();
+        assert!((t0 - 1.5).abs() < 1e-15 && (t1 - 3.5).abs() < 1e-15);
+        // Passing at distance 1 from the centre: chord half-length sqrt(3).
+        let (t0, t1) = ray_sphere(&s, DVec3::new(1.0, 0.0, 0.0), -DVec3::Z).unwrap();
+        assert!(
+            (t0 - (5.0 - 3f64.sqrt())).abs() < 1e-12 && (t1 - (5.0 + 3f64.sqrt())).abs() < 1e-12
+        );
+        assert!(ray_sphere(&s, DVec3::new(2.5, 0.0, 0.0), -DVec3::Z).is_none());
+    }
 }

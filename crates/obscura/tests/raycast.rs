@@ -1,0 +1,740 @@
+//! Ray casting against the z-buffer and against itself.
+//!
+//! Rays come from the camera in world space, the z-buffer from the prepared view's
+//! screen polygons: agreement on (nearly) every pixel checks the whole pipeline. The
+//! four accelerations run the same exact test on the same triangles, so they must
+//! agree with each other bit for bit.
+
+use glam::{DMat3, DMat4, DVec3};
+use obscura::accel::bvh::traverse::{Kernel, TraceCounters, TraversalStack};
+use obscura::accel::bvh::{Bvh, BvhOptions, Slot, WIDTH};
+use obscura::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
+use obscura::accel::triangles::{HitContext, PrimaryRays, SceneTriangles, WatertightRay};
+use obscura::cull::backface::BackfaceMode;
+use obscura::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb};
+use obscura::scene::{Camera, MeshBuilder, ObjectDesc, demo};
+use obscura::surface::raycast::{self, Acceleration};
+use obscura::surface::{Algorithm, RenderOptions, render};
+use obscura::{BACKGROUND, Frame, PrepareOptions, Scene, Stats, Viewport, prepare};
+use proptest::prelude::*;
+
+const VARIANTS: [Algorithm; 4] = [
+    Algorithm::Raycast,
+    Algorithm::RaycastBounds,
+    Algorithm::RaycastBvh,
+    Algorithm::RaycastGrid,
+];
+
+fn frames(
+    scene: &Scene,
+    cam: &Camera,
+    w: u32,
+    h: u32,
+    backface: BackfaceMode,
+    algos: &[Algorithm],
+    options: &RenderOptions,
+) -> Vec<(Algorithm, Frame, Stats)> {
+    let vp = Viewport::new(u64::from(w), u64::from(h)).unwrap();
+    let view = prepare(
+        scene,
+        cam,
+        vp,
+        &PrepareOptions::default().with_backface(backface),
+    )
+    .unwrap();
+    algos
+        .iter()
+        .map(|&a| {
+            let (f, s) = render(a, &view, options).unwrap();
+            (a, f, s)
+        })
+        .collect()
+}
+
+/// Asserts that `frame` equals the reference on at least `min_fraction` of the pixels,
+/// printing the differing pixels otherwise; returns how many differ.
+fn assert_agrees(name: &str, reference: &Frame, frame: &Frame, min_fraction: f64) -> usize {
+    let diff = reference.differences(frame);
+    let total = reference.ids.len();
+    let agree = 1.0 - diff.len() as f64 / total as f64;
+    if agree < min_fraction {
+        let shown: Vec<String> = diff
+            .iter()
+            .take(40)
+            .map(|(x, y, a, b)| format!("({x},{y}): z-buffer {a} vs {b}"))
+            .collect();
+        panic!(
+            "{name}: {} of {total} pixels differ ({:.4}% agree):\n{}",
+            diff.len(),
+            agree * 100.0,
+            shown.join("\n")
+        );
+    }
+    // Where the ids agree the depths must too (to f32 rounding and the z-buffer's
+    // interpolation of the depth key).
+    for (k, (&a, &b)) in reference.depth.iter().zip(&frame.depth).enumerate() {
+        if reference.ids[k] == frame.ids[k] && reference.ids[k] != BACKGROUND {
+            assert!(
+                (a - b).abs() <= 1e-4 * a.abs().max(1.0),
+                "{name}: depth at pixel {k}: {a} vs {b}"
+            );
+        }
+    }
+    diff.len()
+}
+
+fn assert_identical(name: &str, a: &Frame, b: &Frame) {
+    let diff = a.differences(b);
+    assert!(
+        diff.is_empty(),
+        "{name}: {} pixels differ, first {:?}",
+        diff.len(),
+        &diff[..diff.len().min(20)]
+    );
+    let depth_diff = a
+        .depth
+        .iter()
+        .zip(&b.depth)
+        .position(|(x, y)| x.to_bits() != y.to_bits());
+    assert!(
+        depth_diff.is_none(),
+        "{name}: depth differs at {depth_diff:?}"
+    );
+}
+
+/// Every variant against the z-buffer (>= 99.9 %) and, when `identical`, against brute
+/// force bit for bit.
+fn check_scene(name: &str, scene: &Scene, cam: &Camera, w: u32, h: u32, backface: BackfaceMode) {
+    let mut algos = vec![Algorithm::ZBuffer];
+    algos.extend(VARIANTS);
+    let out = frames(
+        scene,
+        cam,
+        w,
+        h,
+        backface,
+        &algos,
+        &RenderOptions::default(),
+    );
+    let reference = &out[0].1;
+    assert!(
+        reference.covered_pixels() > 0,
+        "{name}: the scene shows nothing"
+    );
+    for (a, f, _) in &out[1..] {
+        let n = assert_agrees(&format!("{name} {a}"), reference, f, 0.999);
+        eprintln!(
+            "{name} {a}: {n} of {} pixels differ from the z-buffer",
+            w * h
+        );
+        assert_identical(&format!("{name} {a} vs raycast"), &out[1].1, f);
+    }
+}
+
+fn random_triangles(count: usize, seed: u64) -> Scene {
+    let mut rng = demo::SplitMix64(seed);
+    let mut b = MeshBuilder::new();
+    for _ in 0..count {
+        let c = DVec3::new(
+            rng.range(-3.0, 3.0),
+            rng.range(-2.0, 2.0),
+            rng.range(-3.0, 3.0),
+        );
+        let first = b.vertex_count() as u32;
+        for _ in 0..3 {
+            b.push_position(
+                c + DVec3::new(
+                    rng.range(-0.8, 0.8),
+                    rng.range(-0.8, 0.8),
+                    rng.range(-0.8, 0.8),
+                ),
+            );
+        }
+        b.push_face(&[first, first + 1, first + 2], None).unwrap();
+    }
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("soup", b.finish().0)).unwrap();
+    s
+}
+
+fn generic_camera(eye: DVec3, target: DVec3) -> Camera {
+    Camera::perspective(eye, target, DVec3::Y, 50.0, 0.1, 100.0)
+}
+
+#[test]
+fn demo_default_matches_the_zbuffer() {
+    let scene = demo::default_scene();
+    let cam = scene.default_camera(160.0 / 120.0);
+    check_scene("default", &scene, &cam, 160, 120, BackfaceMode::Closed);
+    check_scene(
+        "default, no culling",
+        &scene,
+        &cam,
+        160,
+        120,
+        BackfaceMode::Off,
+    );
+}
+
+#[test]
+fn random_triangles_match_the_zbuffer() {
+    let scene = random_triangles(400, 12);
+    let cam = generic_camera(DVec3::new(4.3, 3.1, 8.7), DVec3::new(0.2, -0.1, 0.3));
+    check_scene(
+        "random triangles",
+        &scene,
+        &cam,
+        150,
+        110,
+        BackfaceMode::Closed,
+    );
+    // Culling every face (the soup is open, so only `All` culls): about half remain.
+    check_scene(
+        "random triangles, all culled",
+        &scene,
+        &cam,
+        150,
+        110,
+        BackfaceMode::All,
+    );
+}
+
+#[test]
+fn dense_sphere_matches_the_zbuffer() {
+    let scene = demo::sphere(96, 48);
+    let cam = *scene.camera().unwrap();
+    check_scene("sphere", &scene, &cam, 160, 90, BackfaceMode::Closed);
+}
+
+#[test]
+fn objects_crossing_the_near_plane_match_the_zbuffer() {
+    // A floor running under and behind the eye, and a box the near plane cuts.
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("floor", demo::grid_mesh(40.0, 40.0, 8, 8)))
+        .unwrap();
+    s.add(
+        ObjectDesc::new(
+            "box",
+            demo::box_mesh(DVec3::new(-0.7, 0.0, -0.6), DVec3::new(0.6, 1.3, 0.7)),
+        )
+        .with_transform(DMat4::from_rotation_y(0.3)),
+    )
+    .unwrap();
+    let cam = Camera::perspective(
+        DVec3::new(0.13, 0.61, 0.97),
+        DVec3::new(-0.2, 0.4, -3.0),
+        DVec3::Y,
+        70.0,
+        0.5,
+        50.0,
+    );
+    // The near plane really cuts the box: some of its vertices are nearer than it.
+    let (_, _, f) = cam.basis();
+    let depths: Vec<f64> = s.objects()[1]
+        .world_polygon(0)
+        .iter()
+        .chain(s.objects()[1].world_polygon(1).iter())
+        .map(|p| (*p - cam.eye).dot(f))
+        .collect();
+    assert!(
+        depths.iter().any(|&d| d < 0.5) && depths.iter().any(|&d| d > 0.5),
+        "{depths:?}"
+    );
+    check_scene("near plane", &s, &cam, 140, 100, BackfaceMode::Closed);
+}
+
+#[test]
+fn orthographic_camera_matches_the_zbuffer() {
+    let scene = demo::default_scene();
+    let cam = Camera::orthographic(
+        DVec3::new(6.1, 5.3, 7.7),
+        DVec3::new(0.1, 0.9, -0.2),
+        DVec3::Y,
+        9.0,
+        0.5,
+        40.0,
+    );
+    check_scene("orthographic", &scene, &cam, 150, 100, BackfaceMode::Closed);
+}
+
+#[test]
+fn bounding_volumes_agree_and_save_tests() {
+    let scene = demo::city(6, 6, 3);
+    let cam = *scene.camera().unwrap();
+    let vp = Viewport::new(96, 64).unwrap();
+    let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+    let (brute, brute_stats) =
+        raycast::render(&view, Acceleration::BruteForce, &RenderOptions::default()).unwrap();
+    let mut hits_by_kind = Vec::new();
+    for kind in BoundsKind::ALL {
+        let (f, s) =
+            raycast::render(&view, Acceleration::Bounds(kind), &RenderOptions::default()).unwrap();
+        assert_identical(&format!("bounds {}", kind.name()), &brute, &f);
+        let get = |k: &str| s.get(k).unwrap();
+        let rays = f64::from(vp.width * vp.height);
+        assert_eq!(get("rays"), rays);
+        assert_eq!(get("objects"), 37.0);
+        assert_eq!(get("bound_tests"), rays * 37.0);
+        assert!(get("bound_hits") < get("bound_tests"), "{kind:?}");
+        // Brute force's count is every front triangle for every ray.
+        assert_eq!(
+            get("triangle_tests_brute_force"),
+            brute_stats.get("triangle_tests").unwrap()
+        );
+        assert_eq!(
+            get("triangle_tests_saved"),
+            get("triangle_tests_brute_force") - get("triangle_tests")
+        );
+        assert!(
+            get("saved_fraction") > 0.5,
+            "{kind:?} saved {}",
+            get("saved_fraction")
+        );
+        hits_by_kind.push((kind, get("bound_hits")));
+    }
+    // The 26-DOP includes the AABB's three slabs: it is inside it, so it is met by no
+    // more rays.
+    let hits = |k: BoundsKind| hits_by_kind.iter().find(|h| h.0 == k).unwrap().1;
+    assert!(hits(BoundsKind::Kdop) <= hits(BoundsKind::Aabb));
+}
+
+#[test]
+fn grid_accepts_hits_only_inside_the_current_cell() {
+    let scene = demo::default_scene();
+    let tris = SceneTriangles::new(&scene);
+    // A coarse grid makes triangles span many cells, where the rule matters.
+    let grid = UniformGrid::build(&tris, &GridOptions::default().with_density(0.05));
+    let vp = Viewport::new(80, 60).unwrap();
+    let cam = scene.default_camera(vp.aspect());
+    let rays = PrimaryRays::new(&cam, vp);
+    let ignored = tris.ignored_polygons(&scene, &cam, BackfaceMode::Closed);
+    let (mut checked, mut multi_cell) = (0, 0);
+    let mut counters = GridCounters::default();
+    let mut mailbox = Mailbox::new(&tris);
+    for j in 0..vp.height {
+        for i in 0..vp.width {
+            let (o, d) = rays.ray(f64::from(i) + 0.5, f64::from(j) + 0.5);
+            let ctx = HitContext {
+                ray: WatertightRay::new(o, d).unwrap(),
+                ignored: &ignored,
+                faces: tris.polygon_faces(),
+                t_min: rays.near,
+                tie: rays.tie_rule(),
+            };
+            let out = grid.closest_hit(&tris, &ctx, rays.far, &mut mailbox, &mut counters);
+            let Some(cell) = out.cell else {
+                assert!(!out.hit.is_hit());
+                continue;
+            };
+            let (lo, hi) = grid.cell_box(cell);
+            let p = o + d * out.hit.t;
+            let tol = (hi - lo) * 1e-9;
+            assert!(
+                p.cmpge(lo - tol).all() && p.cmple(hi + tol).all(),
+                "pixel {i},{j}: hit {p:?} outside cell {cell:?} {lo:?}..{hi:?}"
+            );
+            checked += 1;
+            // Count hits on triangles that span several cells (where a hit in a later
+            // cell could have been wrongly accepted earlier).
+            let spans = {
+                let [nx, ny, nz] = grid.resolution();
+                let mut n = 0;
+                for z in 0..nz {
+                    for y in 0..ny {
+                        for x in 0..nx {
+                            n += usize::from(grid.cell_triangles([x, y, z]).iter().any(|&t| {
+                                tris.polygon_faces()[tris.triangle_polygons()[t as usize] as usize]
+                                    == out.hit.face
+                            }));
+                        }
+                    }
+                }
+                n
+            };
+            multi_cell += usize::from(spans > 1);
+        }
+    }
+    assert!(checked > 1000 && multi_cell > 100, "{checked} {multi_cell}");
+    // Triangles spanning cells are met again: the mailbox answers instead of a new test.
+    assert!(
+        counters.mailbox_hits > counters.triangles / 10,
+        "{counters:?}"
+    );
+    // The renderer checks the same for every pixel and reports it.
+    let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+    let (_, stats) = render(Algorithm::RaycastGrid, &view, &RenderOptions::default()).unwrap();
+    assert_eq!(stats.get("hits_outside_cell"), Some(0.0));
+    assert!(stats.get("cells_per_ray").unwrap() > 1.0);
+}
+
+#[test]
+fn grid_without_the_cell_rule_would_be_wrong() {
+    // Why the rule exists (seed 002): a long triangle A spans cells 0..3 along the ray
+    // but is hit far away, in the last cell; a small triangle B in cell 2 is nearer.
+    // Accepting A's hit when it is found in cell 0 would show A. The grid must show B.
+    let mut b = MeshBuilder::new();
+    // A: a long sliver slanted along -z, hit by the ray along -z near its far end.
+    for p in [
+        DVec3::new(-0.5, -0.5, -0.2),
+        DVec3::new(0.5, -0.5, -0.2),
+        DVec3::new(0.0, 0.5, -9.8),
+    ] {
+        b.push_position(p);
+    }
+    b.push_face(&[0, 1, 2], None).unwrap();
+    // B: small, square to the ray, at z = -5.
+    for p in [
+        DVec3::new(-0.3, -0.3, -5.0),
+        DVec3::new(0.3, -0.3, -5.0),
+        DVec3::new(0.0, 0.3, -5.0),
+    ] {
+        b.push_position(p);
+    }
+    b.push_face(&[3, 4, 5], None).unwrap();
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("two", b.finish().0)).unwrap();
+    let cam = Camera::perspective(
+        DVec3::new(0.0, 0.25, 2.0),
+        DVec3::new(0.0, 0.25, -1.0),
+        DVec3::Y,
+        10.0,
+        0.1,
+        50.0,
+    );
+    let tris = SceneTriangles::new(&s);
+    let grid = UniformGrid::build(&tris, &GridOptions::default().with_density(0.01));
+    let vp = Viewport::new(1, 1).unwrap();
+    let rays = PrimaryRays::new(&cam, vp);
+    let (o, d) = rays.ray(0.5, 0.5);
+    let ignored = vec![false; tris.polygon_count()];
+    let ctx = HitContext {
+        ray: WatertightRay::new(o, d).unwrap(),
+        ignored: &ignored,
+        faces: tris.polygon_faces(),
+        t_min: rays.near,
+        tie: rays.tie_rule(),
+    };
+    let out = grid.closest_hit(
+        &tris,
+        &ctx,
+        rays.far,
+        &mut Mailbox::new(&tris),
+        &mut GridCounters::default(),
+    );
+    assert_eq!(out.hit.face, 1);
+    assert!((out.hit.t - 7.0).abs() < 1e-9, "{}", out.hit.t);
+    // And A is really hit farther along the same ray, from a cell before B's.
+    let a = ctx
+        .ray
+        .intersect_any(&tris.vertices()[0], 0.0, 100.0, &ctx.tie)
+        .unwrap();
+    assert!(a > 7.0);
+}
+
+#[test]
+fn bvh_invariants_and_independent_structure_checks() {
+    let scene = random_triangles(3000, 5);
+    let tris = SceneTriangles::new(&scene);
+    let bvh = Bvh::build(&tris, &BvhOptions::default());
+    bvh.check_invariants().unwrap();
+    // Independently: walk the tree, collect every leaf's triangles, and compare them
+    // with the input (by vertices, through the triangle order).
+    let mut seen = vec![0u32; tris.len()];
+    let nodes = bvh.nodes_with_depth();
+    let mut leaves = 0;
+    let mut root_box = Aabb::EMPTY;
+    for &(i, depth) in &nodes {
+        let n = bvh.node(i);
+        for k in 0..WIDTH {
+            let b = n.slot_box(k);
+            if depth == 1 && n.slot(k) != Slot::Empty {
+                root_box = root_box.union(b);
+            }
+            match n.slot(k) {
+                Slot::Empty => assert_eq!(n.min[0][k], f32::INFINITY),
+                Slot::Leaf { first, count } => {
+                    leaves += 1;
+                    assert!(count as usize <= BvhOptions::default().max_leaf_size);
+                    for t in first..first + count {
+                        let original = bvh.triangle_order()[t as usize] as usize;
+                        seen[original] += 1;
+                        assert_eq!(bvh.triangles()[t as usize], tris.vertices()[original]);
+                        for v in tris.vertices()[original] {
+                            assert!(b.contains(v), "vertex outside its leaf box");
+                        }
+                    }
+                }
+                Slot::Node(c) => {
+                    // Every box of the child lies inside the box the parent keeps for it.
+                    let child = bvh.node(c);
+                    for kk in 0..WIDTH {
+                        if child.slot(kk) != Slot::Empty {
+                            let cb = child.slot_box(kk);
+                            assert!(cb.min.cmpge(b.min).all() && cb.max.cmple(b.max).all());
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        seen.iter().all(|&s| s == 1),
+        "a triangle is in zero or several leaves"
+    );
+    let s = bvh.stats();
+    assert_eq!((s.nodes, s.leaves), (nodes.len(), leaves));
+    assert_eq!(s.depth, nodes.iter().map(|n| n.1).max().unwrap());
+    // Shallow: far from a list (8-wide: about log8 of the leaves, plus SAH imbalance).
+    assert!(s.depth < 20, "depth {}", s.depth);
+    // The root's boxes together are the scene's box (rounded outwards to f32).
+    let exact = tris.bounds();
+    assert!(root_box.contains(exact.min) && root_box.contains(exact.max));
+    assert!((root_box.extent() - exact.extent()).abs().max_element() < 1e-5);
+}
+
+#[test]
+fn bvh_is_reusable_across_views() {
+    let scene = demo::default_scene();
+    let tris = SceneTriangles::new(&scene);
+    let bvh = Bvh::build(&tris, &BvhOptions::default());
+    let vp = Viewport::new(64, 48).unwrap();
+    for eye in [
+        DVec3::new(4.0, 3.0, 7.0),
+        DVec3::new(-6.0, 2.0, 1.0),
+        DVec3::new(0.5, 9.0, 0.5),
+    ] {
+        let cam = generic_camera(eye, DVec3::new(0.0, 1.0, 0.0));
+        let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+        let (a, _) = raycast::render_bvh(&view, &tris, &bvh, &RenderOptions::default()).unwrap();
+        let (b, _) = render(Algorithm::Raycast, &view, &RenderOptions::default()).unwrap();
+        assert_identical("reused bvh", &b, &a);
+    }
+}
+
+#[test]
+fn bvh_kernels_agree() {
+    // The AVX2 build of the traversal (where the CPU has it) and the portable one run
+    // the same operations: every hit must be the same, bit for bit.
+    let scene = random_triangles(2000, 77);
+    let tris = SceneTriangles::new(&scene);
+    let bvh = Bvh::build(&tris, &BvhOptions::default());
+    let vp = Viewport::new(96, 72).unwrap();
+    for cam in [
+        generic_camera(DVec3::new(4.3, 3.1, 8.7), DVec3::new(0.2, -0.1, 0.3)),
+        Camera::orthographic(
+            DVec3::new(-5.0, 4.0, 6.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            7.0,
+            0.1,
+            40.0,
+        ),
+    ] {
+        let rays = PrimaryRays::new(&cam, vp);
+        let ignored = tris.ignored_polygons(&scene, &cam, BackfaceMode::All);
+        let mut stack = TraversalStack::default();
+        let mut hits = 0;
+        for j in 0..vp.height {
+            for i in 0..vp.width {
+                let (o, d) = rays.ray(f64::from(i) + 0.5, f64::from(j) + 0.5);
+                let ctx = HitContext {
+                    ray: WatertightRay::new(o, d).unwrap(),
+                    ignored: &ignored,
+                    faces: tris.polygon_faces(),
+                    t_min: rays.near,
+                    tie: rays.tie_rule(),
+                };
+                let (mut ca, mut cb) = (TraceCounters::default(), TraceCounters::default());
+                let a = bvh.closest_hit_with(Kernel::Auto, &ctx, rays.far, &mut stack, &mut ca);
+                let b = bvh.closest_hit_with(Kernel::Portable, &ctx, rays.far, &mut stack, &mut cb);
+                assert_eq!((a, ca), (b, cb), "pixel {i},{j}");
+                hits += usize::from(a.is_hit());
+            }
+        }
+        assert!(hits > 1000, "{hits}");
+    }
+}
+
+#[test]
+fn empty_scenes_inside_cameras_and_culled_views_give_background() {
+    let empty = Scene::new();
+    let cam = generic_camera(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO);
+    for (a, f, _) in frames(
+        &empty,
+        &cam,
+        16,
+        12,
+        BackfaceMode::Closed,
+        &VARIANTS,
+        &RenderOptions::default(),
+    ) {
+        assert_eq!(f.covered_pixels(), 0, "{a}");
+        assert!(f.depth.iter().all(|d| d.is_infinite()), "{a}");
+    }
+    // Inside a closed box every face is seen from behind: culled, nothing is seen;
+    // without culling the box's inside fills the image.
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new(
+        "room",
+        demo::box_mesh(DVec3::splat(-2.0), DVec3::splat(2.0)),
+    ))
+    .unwrap();
+    assert!(s.objects()[0].closed);
+    let inside = generic_camera(DVec3::new(0.3, 0.2, 0.1), DVec3::new(1.0, 0.5, -3.0));
+    let mut algos = vec![Algorithm::ZBuffer];
+    algos.extend(VARIANTS);
+    for (a, f, _) in frames(
+        &s,
+        &inside,
+        32,
+        24,
+        BackfaceMode::Closed,
+        &algos,
+        &RenderOptions::default(),
+    ) {
+        assert_eq!(f.covered_pixels(), 0, "{a}");
+    }
+    for (a, f, _) in frames(
+        &s,
+        &inside,
+        32,
+        24,
+        BackfaceMode::Off,
+        &algos,
+        &RenderOptions::default(),
+    ) {
+        assert_eq!(f.covered_pixels(), 32 * 24, "{a}");
+    }
+    // Looking away from everything.
+    let away = generic_camera(DVec3::new(0.0, 0.0, 30.0), DVec3::new(0.0, 0.0, 40.0));
+    let scene = demo::default_scene();
+    for (a, f, _) in frames(
+        &scene,
+        &away,
+        16,
+        12,
+        BackfaceMode::Closed,
+        &VARIANTS,
+        &RenderOptions::default(),
+    ) {
+        assert_eq!(f.covered_pixels(), 0, "{a}");
+    }
+}
+
+#[test]
+fn depth_is_the_eye_space_distance() {
+    // A quad square to the view axis at distance 4 from the eye: every covered pixel
+    // has depth 4, in both projections.
+    let mut s = Scene::new();
+    s.add(
+        ObjectDesc::new("wall", demo::grid_mesh(20.0, 20.0, 3, 3)).with_transform(
+            DMat4::from_translation(DVec3::new(0.0, 0.0, -4.0))
+                * DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        ),
+    )
+    .unwrap();
+    for cam in [
+        Camera::perspective(DVec3::ZERO, -DVec3::Z, DVec3::Y, 60.0, 0.1, 10.0),
+        Camera::orthographic(DVec3::ZERO, -DVec3::Z, DVec3::Y, 5.0, 0.1, 10.0),
+    ] {
+        for (a, f, _) in frames(
+            &s,
+            &cam,
+            20,
+            16,
+            BackfaceMode::Off,
+            &VARIANTS,
+            &RenderOptions::default(),
+        ) {
+            assert_eq!(f.covered_pixels(), 320, "{a}");
+            assert!(f.depth.iter().all(|&d| (d - 4.0).abs() < 1e-5), "{a}");
+        }
+    }
+}
+
+#[test]
+fn stats_report_the_figures_of_each_variant() {
+    let scene = demo::default_scene();
+    let cam = scene.default_camera(4.0 / 3.0);
+    let out = frames(
+        &scene,
+        &cam,
+        40,
+        30,
+        BackfaceMode::Closed,
+        &VARIANTS,
+        &RenderOptions::default(),
+    );
+    for (a, _, s) in &out {
+        for key in [
+            "rays",
+            "hits",
+            "triangle_tests",
+            "trace_ms",
+            "mrays_per_s",
+            "time_ms",
+        ] {
+            assert!(s.get(key).is_some(), "{a}: no {key}");
+        }
+        assert_eq!(s.get("rays"), Some(1200.0));
+    }
+    let bvh = &out[2].2;
+    for key in [
+        "build_ms",
+        "nodes",
+        "leaves",
+        "depth",
+        "triangle_tests_per_ray",
+        "node_visits_per_ray",
+    ] {
+        assert!(bvh.get(key).is_some(), "bvh: no {key}");
+    }
+    let grid = &out[3].2;
+    for key in ["cells", "refs_per_cell", "cells_per_ray", "build_ms"] {
+        assert!(grid.get(key).is_some(), "grid: no {key}");
+    }
+    // The accelerations test far fewer triangles than brute force.
+    let tests = |k: usize| out[k].2.get("triangle_tests").unwrap();
+    assert!(
+        tests(2) * 20.0 < tests(0) && tests(3) * 5.0 < tests(0),
+        "{} {} {}",
+        tests(0),
+        tests(2),
+        tests(3)
+    );
+}
+
+fn points_strategy() -> impl Strategy<Value = Vec<(f64, f64, f64)>> {
+    prop::collection::vec((-50.0..50.0f64, -5.0..5.0f64, -0.5..0.5f64), 1..60)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn obb_and_kdop_contain_every_point(raw in points_strategy(), angle in 0.0..6.3f64) {
+        let r = DMat3::from_euler(glam::EulerRot::YXZ, angle, angle * 0.7, -angle * 0.3);
+        let pts: Vec<DVec3> = raw.iter().map(|&(x, y, z)| r * DVec3::new(x, y, z)).collect();
+        let obb = Obb::from_points(&pts).unwrap();
+        prop_assert!(pts.iter().all(|&p| obb.contains(p)));
+        // Rounding can make a ray through a point exactly on a face miss it: the ray
+        // caster grows the volumes by a margin relative to the coordinates, as here.
+        let margin = 1e-9 * 100.0;
+        let aabb = Aabb::from_points(pts.iter().copied());
+        let e = aabb.extent();
+        prop_assert!(obb.volume() <= e.x * e.y * e.z * (1.0 + 1e-12) + 1e-12);
+        for kind in [KdopKind::K14, KdopKind::K18, KdopKind::K26] {
+            let k = Kdop::from_points(&pts, kind).unwrap();
+            prop_assert!(pts.iter().all(|&p| k.contains(p)));
+            // Every ray through a point of the set meets both volumes, at that point.
+            for &p in pts.iter().take(5) {
+                let o = p + DVec3::new(3.0, 7.0, -11.0);
+                let d = p - o;
+                let (t0, t1) = k.expanded(margin).ray_interval(o, d).unwrap();
+                prop_assert!(t0 <= 1.0 + 1e-9 && t1 >= 1.0 - 1e-9);
+                let (t0, t1) = obb.expanded(margin).ray_interval(o, d).unwrap();
+                prop_assert!(t0 <= 1.0 + 1e-9 && t1 >= 1.0 - 1e-9);
+            }
+        }
+    }
+}
