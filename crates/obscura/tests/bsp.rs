@@ -5,69 +5,15 @@
 use glam::{DMat4, DVec3};
 use obscura::accel::bsp::{BspOptions, BspTraversal, BspTree, Viewpoint};
 use obscura::geom::polygon_area;
-use obscura::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport, demo, demo::SplitMix64};
-use obscura::surface::{Algorithm, RenderOptions, bsp, render};
-use obscura::{BACKGROUND, Frame, PrepareOptions, PreparedView, prepare};
+use obscura::scene::{Camera, ObjectDesc, Scene, Viewport, demo, demo::SplitMix64};
+use obscura::surface::{RenderOptions, bsp};
+use obscura::{BACKGROUND, PreparedView};
 
-/// A scene of `n` random triangles (one object each) in a cube of side 10, some
-/// interpenetrating.
-fn random_triangles(n: usize, seed: u64) -> Scene {
-    let mut rng = SplitMix64(seed);
-    let mut s = Scene::new();
-    for i in 0..n {
-        let c = DVec3::new(
-            rng.range(-5.0, 5.0),
-            rng.range(-5.0, 5.0),
-            rng.range(-5.0, 5.0),
-        );
-        let mut b = MeshBuilder::new();
-        for _ in 0..3 {
-            b.push_position(
-                c + DVec3::new(
-                    rng.range(-1.5, 1.5),
-                    rng.range(-1.5, 1.5),
-                    rng.range(-1.5, 1.5),
-                ),
-            );
-        }
-        b.push_face(&[0, 1, 2], None).unwrap();
-        s.add(ObjectDesc::new(format!("t{i}"), b.finish().0))
-            .unwrap();
-    }
-    s
-}
-
-fn quad_object(name: &str, pts: [DVec3; 4]) -> ObjectDesc {
-    let mut b = MeshBuilder::new();
-    for p in pts {
-        b.push_position(p);
-    }
-    b.push_face(&[0, 1, 2, 3], None).unwrap();
-    ObjectDesc::new(name, b.finish().0)
-}
-
-fn view<'s>(scene: &'s Scene, cam: &Camera, w: u32, h: u32) -> PreparedView<'s> {
-    let vp = Viewport::new(u64::from(w), u64::from(h)).unwrap();
-    prepare(scene, cam, vp, &PrepareOptions::default()).unwrap()
-}
+mod hsr_scenes;
+use hsr_scenes::{assert_like_zbuffer, polygon_object, random_triangle_objects, view};
 
 fn options(traversal: BspTraversal) -> RenderOptions {
     RenderOptions::default().with_bsp(BspOptions::default().with_traversal(traversal))
-}
-
-/// Asserts that at least `min_fraction` of the pixels have the z-buffer's id; prints
-/// the differing pixels otherwise.
-fn assert_like_zbuffer(frame: &Frame, view: &PreparedView<'_>, min_fraction: f64, label: &str) {
-    let (z, _) = render(Algorithm::ZBuffer, view, &RenderOptions::default()).unwrap();
-    let diffs = frame.differences(&z);
-    let fraction = 1.0 - diffs.len() as f64 / z.ids.len() as f64;
-    assert!(
-        fraction >= min_fraction,
-        "{label}: {} of {} pixels differ from the z-buffer (x, y, got, z-buffer): {:?}",
-        diffs.len(),
-        z.ids.len(),
-        &diffs[..diffs.len().min(30)]
-    );
 }
 
 fn both_traversals(view: &PreparedView<'_>, min_fraction: f64, label: &str) {
@@ -144,7 +90,10 @@ fn check_order_invariants(tree: &BspTree, vp: Viewpoint) -> usize {
 
 #[test]
 fn traversal_order_holds_from_both_sides_of_every_node() {
-    for (scene, views) in [(random_triangles(300, 11), 6), (demo::default_scene(), 4)] {
+    for (scene, views) in [
+        (random_triangle_objects(300, 11, 5.0, 1.5), 6),
+        (demo::default_scene(), 4),
+    ] {
         let tree = BspTree::build(&scene, &BspOptions::default()).unwrap();
         assert!(tree.stats().splits > 0);
         let scale = scene.bounds().extent().max_element();
@@ -191,7 +140,7 @@ fn traversal_order_holds_from_both_sides_of_every_node() {
 
 #[test]
 fn fragments_lie_on_their_side_of_every_ancestor_and_keep_the_area() {
-    let scene = random_triangles(200, 5);
+    let scene = random_triangle_objects(200, 5, 5.0, 1.5);
     let tree = BspTree::build(&scene, &BspOptions::default()).unwrap();
     // Walk down, remembering the planes above with the side taken.
     let mut stack = vec![(0u32, Vec::<(usize, bool)>::new())];
@@ -295,7 +244,7 @@ fn one_tree_serves_many_views_including_orthographic_and_near_plane_crossings() 
 
 #[test]
 fn frames_equal_the_zbuffer_on_random_triangles() {
-    let scene = random_triangles(150, 3);
+    let scene = random_triangle_objects(150, 3, 5.0, 1.5);
     let cam = Camera::perspective(
         DVec3::new(3., 4., 16.),
         DVec3::ZERO,
@@ -322,9 +271,9 @@ fn frames_equal_the_zbuffer_on_random_triangles() {
 fn interpenetrating_quads_and_coplanar_ties() {
     let mut s = Scene::new();
     // Two quads crossing along x = 0.3.
-    s.add(quad_object(
+    s.add(polygon_object(
         "a",
-        [
+        &[
             DVec3::new(-1., -1., -1.),
             DVec3::new(1.6, -1., 1.),
             DVec3::new(1.6, 1., 1.),
@@ -332,9 +281,9 @@ fn interpenetrating_quads_and_coplanar_ties() {
         ],
     ))
     .unwrap();
-    s.add(quad_object(
+    s.add(polygon_object(
         "b",
-        [
+        &[
             DVec3::new(-1., -0.8, 1.),
             DVec3::new(1.6, -0.8, -1.),
             DVec3::new(1.6, 0.8, -1.),
@@ -344,9 +293,9 @@ fn interpenetrating_quads_and_coplanar_ties() {
     .unwrap();
     // Two coplanar overlapping squares facing the camera: the lower id (2) must win.
     for (name, x) in [("c", -3.0), ("d", -2.5)] {
-        s.add(quad_object(
+        s.add(polygon_object(
             name,
-            [
+            &[
                 DVec3::new(x, -0.5, 0.),
                 DVec3::new(x + 1., -0.5, 0.),
                 DVec3::new(x + 1., 0.5, 0.),
@@ -371,11 +320,11 @@ fn interpenetrating_quads_and_coplanar_ties() {
 #[test]
 fn front_to_back_stops_once_the_image_is_full() {
     // A wall filling the view in front of 100 random triangles.
-    let mut scene = random_triangles(100, 8);
+    let mut scene = random_triangle_objects(100, 8, 5.0, 1.5);
     scene
-        .add(quad_object(
+        .add(polygon_object(
             "wall",
-            [
+            &[
                 DVec3::new(-50., -50., 7.),
                 DVec3::new(50., -50., 7.),
                 DVec3::new(50., 50., 7.),
@@ -403,7 +352,7 @@ fn front_to_back_stops_once_the_image_is_full() {
 
 #[test]
 fn split_weight_trades_splits_for_balance() {
-    let scene = random_triangles(400, 21);
+    let scene = random_triangle_objects(400, 21, 5.0, 1.5);
     let few = BspOptions::default()
         .with_weights(100.0, 0.0)
         .with_score_sample(0);
@@ -456,9 +405,9 @@ fn bad_and_degenerate_input_gives_background() {
     }
     // A single face.
     let mut one = Scene::new();
-    one.add(quad_object(
+    one.add(polygon_object(
         "q",
-        [
+        &[
             DVec3::new(-1., -1., 0.),
             DVec3::new(1., -1., 0.),
             DVec3::new(1., 1., 0.),

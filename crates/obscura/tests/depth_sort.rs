@@ -7,22 +7,15 @@ use std::collections::HashMap;
 use glam::DVec3;
 use obscura::cull::backface::BackfaceMode;
 use obscura::geom::polygon_area;
-use obscura::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport, demo, demo::SplitMix64};
+use obscura::scene::{Camera, ObjectDesc, Scene, Viewport, demo, demo::SplitMix64};
 use obscura::surface::depth_sort::{PaintOrder, paint_order, paint_order_matrix};
 use obscura::surface::{Algorithm, RenderOptions, render};
 use obscura::{BACKGROUND, PrepareOptions, PreparedView, Stats, prepare};
 
-const VARIANTS: [Algorithm; 2] = [Algorithm::DepthSort, Algorithm::DepthSortMatrix];
+mod hsr_scenes;
+use hsr_scenes::{assert_like_zbuffer, polygon_object, random_triangle_objects, view};
 
-fn polygon_object(name: &str, pts: &[DVec3]) -> ObjectDesc {
-    let mut b = MeshBuilder::new();
-    for &p in pts {
-        b.push_position(p);
-    }
-    let idx: Vec<u32> = (0..pts.len() as u32).collect();
-    b.push_face(&idx, None).unwrap();
-    ObjectDesc::new(name, b.finish().0)
-}
+const VARIANTS: [Algorithm; 2] = [Algorithm::DepthSort, Algorithm::DepthSortMatrix];
 
 fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64, z: f64) -> [DVec3; 4] {
     [
@@ -31,11 +24,6 @@ fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64, z: f64) -> [DVec3; 4] {
         DVec3::new(x1, y1, z),
         DVec3::new(x0, y1, z),
     ]
-}
-
-fn view<'s>(scene: &'s Scene, cam: &Camera, w: u32, h: u32) -> PreparedView<'s> {
-    let vp = Viewport::new(u64::from(w), u64::from(h)).unwrap();
-    prepare(scene, cam, vp, &PrepareOptions::default()).unwrap()
 }
 
 fn front_camera() -> Camera {
@@ -53,16 +41,7 @@ fn front_camera() -> Camera {
 /// the z-buffer's id, printing the differing pixels otherwise. Returns the stats.
 fn check(view: &PreparedView<'_>, algo: Algorithm, min_fraction: f64, label: &str) -> Stats {
     let (frame, stats) = render(algo, view, &RenderOptions::default()).unwrap();
-    let (z, _) = render(Algorithm::ZBuffer, view, &RenderOptions::default()).unwrap();
-    let diffs = frame.differences(&z);
-    let fraction = 1.0 - diffs.len() as f64 / z.ids.len() as f64;
-    assert!(
-        fraction >= min_fraction,
-        "{label} {algo}: {} of {} pixels differ from the z-buffer (x, y, got, z-buffer): {:?}",
-        diffs.len(),
-        z.ids.len(),
-        &diffs[..diffs.len().min(30)]
-    );
+    assert_like_zbuffer(&frame, view, min_fraction, &format!("{label} {algo}"));
     stats
 }
 
@@ -375,32 +354,9 @@ fn coplanar_overlapping_faces_keep_the_lower_id() {
     assert_eq!(frame.id(50, 30), 3);
 }
 
-fn random_triangles(n: usize, seed: u64) -> Scene {
-    let mut rng = SplitMix64(seed);
-    let mut s = Scene::new();
-    for i in 0..n {
-        let c = DVec3::new(
-            rng.range(-4.0, 4.0),
-            rng.range(-4.0, 4.0),
-            rng.range(-4.0, 4.0),
-        );
-        let pts: Vec<DVec3> = (0..3)
-            .map(|_| {
-                c + DVec3::new(
-                    rng.range(-1.5, 1.5),
-                    rng.range(-1.5, 1.5),
-                    rng.range(-1.5, 1.5),
-                )
-            })
-            .collect();
-        s.add(polygon_object(&format!("t{i}"), &pts)).unwrap();
-    }
-    s
-}
-
 #[test]
 fn random_triangles_render_like_the_zbuffer() {
-    let scene = random_triangles(120, 17);
+    let scene = random_triangle_objects(120, 17, 4.0, 1.5);
     for cam in [
         Camera::perspective(
             DVec3::new(2., 3., 14.),

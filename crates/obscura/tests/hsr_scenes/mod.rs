@@ -1,12 +1,12 @@
-//! Scenes and checks shared by the scanline and Warnock tests: each algorithm must give
-//! the z-buffer's frame on them, pixel for pixel.
+//! Scenes and checks shared by the hidden-surface tests (scanline, Warnock, depth sort,
+//! BSP): each algorithm must give the z-buffer's frame on them.
 #![allow(dead_code)]
 
 use glam::{DMat4, DVec3};
 use obscura::scene::demo::{self, SplitMix64};
 use obscura::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport};
 use obscura::surface::{Algorithm, RenderOptions, render};
-use obscura::{Frame, PrepareOptions, Stats, prepare};
+use obscura::{Frame, PrepareOptions, PreparedView, Stats, prepare};
 
 /// A scene with its camera and image size.
 pub struct Case {
@@ -96,6 +96,57 @@ pub fn polygons_object(name: &str, polys: &[Vec<DVec3>]) -> ObjectDesc {
         b.push_face(&idx, None).unwrap();
     }
     ObjectDesc::new(name, b.finish().0).with_closed(false)
+}
+
+/// One object made of one polygon (world coordinates).
+pub fn polygon_object(name: &str, pts: &[DVec3]) -> ObjectDesc {
+    polygons_object(name, &[pts.to_vec()])
+}
+
+/// `n` random triangles, one object each: centres uniform in `[-half, half]^3`,
+/// vertices uniform within `spread` of the centre on each axis. Some interpenetrate.
+pub fn random_triangle_objects(n: usize, seed: u64, half: f64, spread: f64) -> Scene {
+    let mut rng = SplitMix64(seed);
+    let mut s = Scene::new();
+    for i in 0..n {
+        let c = DVec3::new(
+            rng.range(-half, half),
+            rng.range(-half, half),
+            rng.range(-half, half),
+        );
+        let pts: Vec<DVec3> = (0..3)
+            .map(|_| {
+                c + DVec3::new(
+                    rng.range(-spread, spread),
+                    rng.range(-spread, spread),
+                    rng.range(-spread, spread),
+                )
+            })
+            .collect();
+        s.add(polygon_object(&format!("t{i}"), &pts)).unwrap();
+    }
+    s
+}
+
+/// The prepared view of a scene (default options).
+pub fn view<'s>(scene: &'s Scene, cam: &Camera, w: u32, h: u32) -> PreparedView<'s> {
+    let vp = Viewport::new(u64::from(w), u64::from(h)).unwrap();
+    prepare(scene, cam, vp, &PrepareOptions::default()).unwrap()
+}
+
+/// Asserts that at least `min_fraction` of the pixels have the z-buffer's id, printing
+/// the differing pixels otherwise.
+pub fn assert_like_zbuffer(frame: &Frame, view: &PreparedView<'_>, min_fraction: f64, label: &str) {
+    let (z, _) = render(Algorithm::ZBuffer, view, &RenderOptions::default()).unwrap();
+    let diffs = frame.differences(&z);
+    let fraction = 1.0 - diffs.len() as f64 / z.ids.len() as f64;
+    assert!(
+        fraction >= min_fraction,
+        "{label}: {} of {} pixels differ from the z-buffer (x, y, got, z-buffer): {:?}",
+        diffs.len(),
+        z.ids.len(),
+        &diffs[..diffs.len().min(30)]
+    );
 }
 
 pub fn scene_of(polys: &[Vec<DVec3>]) -> Scene {
