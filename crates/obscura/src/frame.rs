@@ -40,12 +40,10 @@ impl Frame {
             reason,
         };
         check_fits(viewport, available_memory()).map_err(refuse)?;
-        let mut ids = Vec::new();
-        let mut depth = Vec::new();
-        ids.try_reserve_exact(n)
+        // Huge pages: a 1080p frame in 4 KiB pages costs thousands of page faults.
+        let mut ids = crate::memory::vec_with_capacity(n)
             .map_err(|_| refuse(format!("cannot allocate {} MiB for ids", (n * 4) >> 20)))?;
-        depth
-            .try_reserve_exact(n)
+        let mut depth = crate::memory::vec_with_capacity(n)
             .map_err(|_| refuse(format!("cannot allocate {} MiB for depths", (n * 4) >> 20)))?;
         ids.resize(n, BACKGROUND);
         depth.resize(n, f32::INFINITY);
