@@ -189,7 +189,7 @@ mod tests {
         if kib == 0 {
             eprintln!("note: no huge page backs the advised buffer (memory fragmented?)");
         } else {
-            assert!(kib >= 2048 && kib % 2048 == 0, "{kib}");
+            assert!(kib >= 2048 && kib.is_multiple_of(2048), "{kib}");
         }
     }
 }
