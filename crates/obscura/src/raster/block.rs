@@ -33,6 +33,10 @@
 //!   it, then per row O(n) for a partly covered block and O(1) for a covered one. The
 //!   part of the polygon in the region is classified first, as one block: a covered
 //!   tile is drawn without edge tests, an uncovered one costs nothing more.
+//! - Occlusion culling (optional, [`BlockTarget::with_farthest`]): per block of the
+//!   grid the farthest key it holds; a block whose farthest key is larger than the
+//!   polygon's largest key over the block ([`nearest_key`], a rigorous bound) is
+//!   skipped, which changes nothing in the result.
 //! - Limitations: at most [`MAX_EDGES`] edges ([`BlockSetup::new`] refuses others).
 //!   The caller picks the edge count `E` of a setup: 3 for triangles, 4 for quads, 8
 //!   for the rest (unused edges hold every sample inside).
@@ -41,7 +45,7 @@
 //!   Greene, *Hierarchical polygon tiling with coverage masks* (SIGGRAPH 1996, block
 //!   classification by corners).
 
-use super::lanes::{Lanes, lanes_below, lanes_below16};
+use super::lanes::{Lanes, key_of, lanes_below, lanes_below16};
 use super::{DepthPlane, EdgeFunction, FillRule, PixelRect};
 
 /// The most edges a [`BlockSetup`] holds (one lane each when blocks are classified).
@@ -239,6 +243,9 @@ pub struct BlockTarget<'a> {
     x0: u32,
     y0: u32,
     y1: u32,
+    /// Per block of the grid (see [`BlockTarget::with_farthest`]), a key no larger
+    /// than any its pixels hold; empty when blocks are not culled.
+    farthest: &'a mut [f32],
 }
 
 impl<'a> BlockTarget<'a> {
@@ -263,7 +270,70 @@ impl<'a> BlockTarget<'a> {
             x0,
             y0,
             y1: y0.checked_add(rows)?,
+            farthest: &mut [],
         })
+    }
+
+    /// The target with occlusion culling: `farthest` holds, per block of
+    /// `2 BLOCK x BLOCK` pixels of the grid from the target's first pixel (row after
+    /// row of `stride / (2 BLOCK)` blocks), a key no larger than any key its pixels
+    /// hold. [`draw`] with [`Align::Grid`] skips the blocks whose key is larger than
+    /// every key the polygon has there: the polygon wins none of their pixels, not even
+    /// a tie, so the result is the same. The keys only grow while drawing, so a
+    /// value computed before stays valid (only less effective); [`draw`] recomputes
+    /// the value of each whole block it writes to.
+    #[must_use]
+    pub fn with_farthest(mut self, farthest: &'a mut [f32]) -> Self {
+        self.farthest = farthest;
+        self
+    }
+
+    /// Whether the polygon `s` wins no pixel of `c`, a part of the grid block at
+    /// `(bx, by)`, by the blocks' keys.
+    #[inline(always)]
+    fn hides<const E: usize>(&self, s: &BlockSetup<E>, bx: u32, by: u32, c: PixelRect) -> bool {
+        if self.farthest.is_empty() || bx < self.x0 || by < self.y0 {
+            return false;
+        }
+        let per_row = self.stride / (2 * BLOCK as usize);
+        let at =
+            ((by - self.y0) / BLOCK) as usize * per_row + ((bx - self.x0) / (2 * BLOCK)) as usize;
+        let Some(&far) = self.farthest.get(at) else {
+            return false;
+        };
+        // `!(far > 0)`: an empty pixel (key 0) or a NaN hides nothing.
+        if !(far > 0.0) {
+            return false;
+        }
+        far > nearest_key(s, c)
+    }
+
+    /// Recomputes the farthest key of the grid block at `(bx, by)` if the target holds
+    /// all of its pixels.
+    #[inline(always)]
+    fn refresh(&mut self, bx: u32, by: u32) {
+        let bw = 2 * BLOCK as usize;
+        if self.farthest.is_empty()
+            || bx < self.x0
+            || by < self.y0
+            || (bx - self.x0) as usize + bw > self.stride
+            || by + BLOCK > self.y1
+        {
+            return;
+        }
+        let per_row = self.stride / bw;
+        let at = ((by - self.y0) / BLOCK) as usize * per_row + (bx - self.x0) as usize / bw;
+        let first = self.at(bx, by);
+        let mut m = [f32::INFINITY; 16];
+        for r in 0..BLOCK as usize {
+            let row = &self.keys[first + r * self.stride..][..bw];
+            for (m, &v) in m.iter_mut().zip(row) {
+                *m = if v < *m { v } else { *m };
+            }
+        }
+        if let Some(far) = self.farthest.get_mut(at) {
+            *far = m.into_iter().fold(f32::INFINITY, f32::min);
+        }
     }
 
     /// The pixels it holds.
@@ -295,6 +365,23 @@ impl<'a> BlockTarget<'a> {
         let at = self.at(x, y);
         (&mut self.keys[at..at + n], &mut self.ids[at..at + n])
     }
+}
+
+/// An upper bound of the keys the rasterizer computes for polygon `s` in the pixels
+/// of `c`, as stored (`f32`): the key expression is affine, so its largest value is at
+/// a corner; a margin of `1e-12` of the terms' magnitudes covers the roundings of any
+/// order of evaluation (a few units of `2^-53` each), and [`key_of`] is monotonic.
+/// NaN for a non-finite plane.
+#[inline(always)]
+#[must_use]
+pub fn nearest_key<const E: usize>(s: &BlockSetup<E>, c: PixelRect) -> f32 {
+    let i = if s.dzdx > 0.0 { c.x1 - 1 } else { c.x0 };
+    let j = if s.dzdy > 0.0 { c.y1 - 1 } else { c.y0 };
+    let top = s.key(i, j);
+    let reach = s.z0.abs()
+        + s.dzdy.abs() * (f64::from(j) - f64::from(s.rect.y0)).abs()
+        + s.dzdx.abs() * (f64::from(i) - f64::from(s.rect.x0)).abs();
+    key_of(top + reach * 1e-12)
 }
 
 /// Where blocks start.
@@ -483,6 +570,10 @@ fn draw_blocks<L: Lanes, const E: usize, const WIDE: bool>(
                 x1: cx1,
                 y1: cy1,
             };
+            if WIDE && target.hides(s, bx, by, c) {
+                bx += bw;
+                continue;
+            }
             let full = all_inside
                 || match classify(l, &edges, c) {
                     Class::Outside => {
@@ -493,7 +584,11 @@ fn draw_blocks<L: Lanes, const E: usize, const WIDE: bool>(
                     Class::Partial => false,
                 };
             let lanes = lane_range(cx0 - bx, cx1 - bx);
+            let written = counts.written;
             draw_block::<L, E, WIDE>(l, s, bx, by, cy0..cy1, lanes, full, target, face, counts);
+            if WIDE && counts.written != written {
+                target.refresh(bx, by);
+            }
             bx += bw;
         }
         by += BLOCK;
@@ -671,5 +766,74 @@ pub fn resolve<L: Lanes>(
             return;
         };
         l.resolve(keys, ids, d, o, depth);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::demo::SplitMix64;
+
+    #[test]
+    fn nearest_key_bounds_every_key_of_the_rectangle() {
+        let mut rng = SplitMix64(17);
+        let mut tight = 0;
+        for round in 0..3000 {
+            let x0 = (rng.next_u64() % 200) as u32;
+            let y0 = (rng.next_u64() % 200) as u32;
+            let rect = PixelRect {
+                x0,
+                y0,
+                x1: x0 + 1 + (rng.next_u64() % 40) as u32,
+                y1: y0 + 1 + (rng.next_u64() % 40) as u32,
+            };
+            let scale = [1.0, 1e-3, 1e3][round % 3];
+            let s = BlockSetup::<0> {
+                ox: [],
+                oy: [],
+                sdx: [],
+                sdy: [],
+                bound: [],
+                rect,
+                z0: rng.range(-0.1, 1.0),
+                dzdx: rng.range(-1e-2, 1e-2) * scale,
+                dzdy: rng.range(-1e-2, 1e-2) / scale,
+            };
+            let near = nearest_key(&s, rect);
+            let mut top = 0.0f32;
+            for j in rect.y0..rect.y1 {
+                for i in rect.x0..rect.x1 {
+                    // Both orders of the sum: the row part first (as `key`), the column
+                    // part first.
+                    let a = key_of(s.key(i, j));
+                    let b = key_of(
+                        s.z0 + (s.dzdx * (f64::from(i) - f64::from(rect.x0))
+                            + s.dzdy * (f64::from(j) - f64::from(rect.y0))),
+                    );
+                    assert!(a <= near && b <= near, "{s:?}: {a} {b} {near}");
+                    top = top.max(a);
+                }
+            }
+            tight += usize::from(top == near);
+        }
+        // The margin is far below an f32 unit: the bound is usually the largest key.
+        assert!(tight > 2500, "{tight}");
+        let nan = BlockSetup::<0> {
+            ox: [],
+            oy: [],
+            sdx: [],
+            sdy: [],
+            bound: [],
+            rect: PixelRect {
+                x0: 0,
+                y0: 0,
+                x1: 2,
+                y1: 2,
+            },
+            z0: f64::NAN,
+            dzdx: 0.0,
+            dzdy: 0.0,
+        };
+        assert!(nearest_key(&nan, nan.rect).is_nan());
     }
 }

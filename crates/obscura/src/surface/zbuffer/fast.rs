@@ -5,8 +5,9 @@
 //! Per band, one pass over its polygons: each is set up once; a small one is drawn at
 //! once, a big one (wider or taller than [`BIG`] pixels) is put in the bins of the
 //! 64x64 tiles it overlaps. Then each tile draws its big polygons while its keys and ids
-//! (32 KiB) stay in the first-level cache, and turns its keys and encoded ids into
-//! depths and face ids. The depth test takes the nearer key and, on a tie, the lower
+//! (32 KiB) stay in the first-level cache, nearest first, skipping the blocks that hide
+//! them (see [`crate::raster::block::BlockTarget::with_farthest`]), and turns its keys
+//! and encoded ids into depths and face ids. The depth test takes the nearer key and, on a tie, the lower
 //! face id, so drawing small polygons before big ones gives the frame that drawing
 //! all in order would.
 
@@ -81,6 +82,38 @@ pub(super) struct Band<'a> {
 struct TileBuffer {
     keys: [f32; (TILE * TILE) as usize],
     ids: [u32; (TILE * TILE) as usize],
+    /// Per block of 16 x 8 pixels, the smallest (farthest) key it holds.
+    farthest: [f32; FAR_BLOCKS],
+}
+
+/// Columns of a block of the grid (`2 BLOCK`).
+const FAR_W: usize = 2 * block::BLOCK as usize;
+
+/// Blocks of the grid per tile.
+const FAR_BLOCKS: usize = (TILE * TILE) as usize / (FAR_W * block::BLOCK as usize);
+
+/// The smallest key of each `FAR_W x BLOCK` block of a tile's keys (row after row of
+/// `TILE` keys), into `farthest`. Rows past `rows` count as empty (key 0).
+#[inline(always)]
+fn farthest_keys(keys: &[f32], rows: usize, farthest: &mut [f32; FAR_BLOCKS]) {
+    const T: usize = TILE as usize;
+    const B: usize = block::BLOCK as usize;
+    for (k, far) in farthest.iter_mut().enumerate() {
+        let (by, bx) = ((k / (T / FAR_W)) * B, (k % (T / FAR_W)) * FAR_W);
+        if by + B > rows {
+            *far = 0.0;
+            continue;
+        }
+        // Lane-wise minima (vector instructions), reduced at the end.
+        let mut m = [f32::INFINITY; FAR_W];
+        for y in by..by + B {
+            let row = &keys[y * T + bx..y * T + bx + FAR_W];
+            for (m, &v) in m.iter_mut().zip(row) {
+                *m = if v < *m { v } else { *m };
+            }
+        }
+        *far = m.into_iter().fold(f32::INFINITY, f32::min);
+    }
 }
 
 /// A polygon ready to draw.
@@ -96,6 +129,17 @@ enum Setup {
 }
 
 impl Setup {
+    /// [`block::nearest_key`] over its rectangle (NaN sorts it anywhere).
+    fn nearest_key(&self) -> f32 {
+        let r = self.rect();
+        match self {
+            Setup::Triangle(s) => block::nearest_key(s, r),
+            Setup::Quad(s) => block::nearest_key(s, r),
+            Setup::Polygon(s) => block::nearest_key(s, r),
+            Setup::Spans(_, s) => block::nearest_key(s, r),
+        }
+    }
+
     fn rect(&self) -> PixelRect {
         match self {
             Setup::Triangle(s) => s.rect,
@@ -231,8 +275,9 @@ fn draw_band_impl<L: Lanes>(
     let tiles_y = (y1 - y0).div_ceil(TILE) as usize;
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); tiles_x * tiles_y];
     // Big polygons: triangles (bin entries below OTHER), and the others.
-    let mut big_triangles: Vec<(BlockSetup<3>, u32)> = Vec::new();
-    let mut big: Vec<(Setup, u32)> = Vec::new();
+    // Each with its face and its nearest key.
+    let mut big_triangles: Vec<(BlockSetup<3>, u32, f32)> = Vec::new();
+    let mut big: Vec<(Setup, u32, f32)> = Vec::new();
     let (starts, indices, _) = view.polygon_arrays();
     let vertices = view.vertices();
     let is_big = |r: PixelRect| r.x1 - r.x0 > BIG || r.y1 - r.y0 > BIG;
@@ -270,7 +315,7 @@ fn draw_band_impl<L: Lanes>(
             let face = !faces[p];
             if is_big(rect) {
                 let n = big_triangles.len() as u32;
-                big_triangles.push((t, face));
+                big_triangles.push((t, face, block::nearest_key(&t, rect)));
                 let (xs, ys) = tiles_of(rect);
                 for ty in ys {
                     for bin in &mut bins[ty * tiles_x..][xs.clone()] {
@@ -296,7 +341,8 @@ fn draw_band_impl<L: Lanes>(
         let face = !faces[p];
         if is_big(rect) {
             let n = OTHER | big.len() as u32;
-            big.push((s, face));
+            let near = s.nearest_key();
+            big.push((s, face, near));
             let (xs, ys) = tiles_of(rect);
             for ty in ys {
                 for bin in &mut bins[ty * tiles_x..][xs.clone()] {
@@ -311,6 +357,7 @@ fn draw_band_impl<L: Lanes>(
     let mut tile_buffer = Box::new(TileBuffer {
         keys: [0.0; (TILE * TILE) as usize],
         ids: [0; (TILE * TILE) as usize],
+        farthest: [0.0; FAR_BLOCKS],
     });
     let (keys, ids) = (&mut *band.keys, &mut *band.ids);
     for ty in 0..tiles_y as u32 {
@@ -322,8 +369,7 @@ fn draw_band_impl<L: Lanes>(
                 y1: (y0 + (ty + 1) * TILE).min(y1),
             };
             let n = (tile.x1 - tile.x0) as usize;
-            let bin = &bins[ty as usize * tiles_x + tx as usize];
-            if bin.is_empty() {
+            if bins[ty as usize * tiles_x + tx as usize].is_empty() {
                 for y in tile.y0..tile.y1 {
                     let at = (y - y0) as usize * w + tile.x0 as usize;
                     l.resolve_in_place(&mut keys[at..at + n], &mut ids[at..at + n], depth);
@@ -340,7 +386,13 @@ fn draw_band_impl<L: Lanes>(
                 tb.ids[t..t + n].copy_from_slice(&ids[at..at + n]);
             }
             let rows = (tile.y1 - tile.y0) as usize * TILE as usize;
-            let Some(mut t) = BlockTarget::new(
+            // Columns past the image's edge hold stale keys: no block there is culled.
+            if n == TILE as usize {
+                farthest_keys(&tb.keys, (tile.y1 - tile.y0) as usize, &mut tb.farthest);
+            } else {
+                tb.farthest = [0.0; FAR_BLOCKS];
+            }
+            let Some(t) = BlockTarget::new(
                 &mut tb.keys[..rows],
                 &mut tb.ids[..rows],
                 TILE as usize,
@@ -349,12 +401,23 @@ fn draw_band_impl<L: Lanes>(
             ) else {
                 continue;
             };
-            for &k in bin {
+            let mut t = t.with_farthest(&mut tb.farthest);
+            // Nearest first, so the blocks they fill hide the polygons behind them.
+            let bin = &mut bins[ty as usize * tiles_x + tx as usize];
+            let near = |k: u32| {
                 if k & OTHER == 0 {
-                    let (s, face) = &big_triangles[k as usize];
+                    big_triangles[k as usize].2
+                } else {
+                    big[(k & !OTHER) as usize].2
+                }
+            };
+            bin.sort_unstable_by(|&a, &b| near(b).total_cmp(&near(a)));
+            for &k in bin.iter() {
+                if k & OTHER == 0 {
+                    let (s, face, _) = &big_triangles[k as usize];
                     block::draw(l, s, tile, Align::Grid, &mut t, *face, &mut counts);
                 } else {
-                    let (s, face) = &big[(k & !OTHER) as usize];
+                    let (s, face, _) = &big[(k & !OTHER) as usize];
                     draw_setup(l, s, tile, Align::Grid, &mut t, *face, &mut counts);
                 }
             }

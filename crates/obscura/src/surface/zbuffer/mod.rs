@@ -27,6 +27,11 @@
 //! - the depth test takes the nearer key and, on an exactly equal key, the lower face
 //!   id, so the drawing order does not matter: small polygons are drawn at once, big
 //!   ones tile by tile (64x64 pixels whose buffers stay in the first-level cache);
+//! - occlusion culling of the big polygons: per 16x8 block of a tile the farthest key
+//!   it holds, kept up to date as blocks are written; a tile's big polygons are drawn
+//!   nearest first and skip the blocks whose farthest key is nearer than any of
+//!   theirs (exact: such a polygon wins no pixel there, not even a tie; Greene, Kass
+//!   and Miller, *Hierarchical Z-buffer visibility*, SIGGRAPH 1993);
 //! - a frame of zero bits as the empty buffer (fresh pages, nothing to clear);
 //! - the kernels compiled for AVX2 or AVX-512 when the processor has them (chosen at
 //!   run time; the same operations in the same order, so the same bits, as the
@@ -42,9 +47,9 @@
 //! except where the two nearest polygons' keys are within two units of an `f32`
 //! (relative `2 f32::EPSILON`; a brute-force oracle over all polygons checks every
 //! differing pixel in the tests), and its depths are within that relative tolerance of
-//! the reference's. Coverage, the pixels tested and the polygons drawn are exactly the
-//! reference's; the pixels written may differ (they count overwrites, which depend on
-//! the order). Keys at or below zero (degenerate cameras only: keys of a prepared view
+//! the reference's. Coverage and the polygons drawn are exactly the reference's; the
+//! pixels tested are fewer (culled blocks are not tested) and the pixels written may
+//! differ (they count overwrites, which depend on the order). Keys at or below zero (degenerate cameras only: keys of a prepared view
 //! are positive) are clamped to the smallest positive `f32` by the fast path.
 
 mod bands;

@@ -109,8 +109,8 @@ const KEY_TIE: f64 = 2.0 * f32::EPSILON as f64;
 
 /// Checks a fast frame against the reference's: ids equal but at near ties, depths
 /// within [`KEY_TIE`] (relative; a key within a unit gives a depth within about a
-/// unit, plus the conversion's rounding), the same polygons drawn and pixels tested.
-/// Returns how many ids differ.
+/// unit, plus the conversion's rounding), the same polygons drawn and no more pixels
+/// tested (occlusion culling skips some). Returns how many ids differ.
 fn assert_close(
     a: &(Frame, Stats),
     b: &(Frame, Stats),
@@ -129,9 +129,13 @@ fn assert_close(
         let close = x == y || (f64::from(x) - f64::from(y)).abs() <= KEY_TIE * f64::from(y).abs();
         assert!(close, "{what}: depth {x} at {k}, the reference {y}");
     }
-    for stat in ["polygons", "polygons_drawn", "pixels_tested"] {
+    for stat in ["polygons", "polygons_drawn"] {
         assert_eq!(a.1.get(stat), b.1.get(stat), "{what}: {stat}");
     }
+    assert!(
+        a.1.get("pixels_tested") <= b.1.get("pixels_tested"),
+        "{what}: pixels tested"
+    );
     diff.len()
 }
 
@@ -284,5 +288,57 @@ fn empty_view_gives_background() {
         assert!(f.ids.iter().all(|&i| i == BACKGROUND));
         assert!(f.depth.iter().all(|d| *d == f32::INFINITY));
         assert_eq!(st.get("pixels_tested"), Some(0.0));
+    }
+}
+
+#[test]
+fn hidden_blocks_of_big_polygons_are_culled_without_changing_the_picture() {
+    // Rows of big squares one behind the other, each a little smaller than the one in
+    // front, nearest last in face order (so the far ones are not simply overdrawn):
+    // the far squares' blocks behind the near ones are skipped; the picture is the
+    // reference's.
+    let mut b = MeshBuilder::new();
+    for k in 0..6 {
+        let (z, h) = (-2.0 - f64::from(5 - k), 0.9 - 0.1 * f64::from(k));
+        let h = h * (2.0 - z) / 2.0;
+        let base = b.vertex_count() as u32;
+        for (x, y) in [(-h, -h), (h, -h), (h, h), (-h, h)] {
+            b.push_position(DVec3::new(x, y, z));
+        }
+        b.push_face(&[base, base + 1, base + 2, base + 3], None)
+            .unwrap();
+    }
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("squares", b.finish().0).with_closed(false))
+        .unwrap();
+    let cam = Camera::perspective(
+        DVec3::new(0.0, 0.0, 2.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        60.0,
+        0.1,
+        100.0,
+    );
+    let vp = Viewport::new(300, 200).unwrap();
+    let view = prepare(&s, &cam, vp, &PrepareOptions::default()).unwrap();
+    let opts = RenderOptions::default();
+    let reference = render_reference(&view, &opts).unwrap();
+    assert!(reference.0.covered_pixels() > 20_000);
+    for kernel in kernels() {
+        let fast = render_with(&view, &opts, kernel, 1).unwrap();
+        assert_close(
+            &fast,
+            &reference,
+            &view,
+            opts.fill_rule,
+            &format!("{kernel:?}"),
+        );
+        let tested = |r: &(Frame, Stats)| r.1.get("pixels_tested").unwrap_or(0.0);
+        assert!(
+            tested(&fast) < 0.8 * tested(&reference),
+            "{kernel:?}: {} of {} pixels tested",
+            tested(&fast),
+            tested(&reference)
+        );
     }
 }
