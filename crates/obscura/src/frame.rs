@@ -40,15 +40,37 @@ impl Frame {
             reason,
         };
         check_fits(viewport, available_memory()).map_err(refuse)?;
-        let mut ids = Vec::new();
-        let mut depth = Vec::new();
-        ids.try_reserve_exact(n)
+        // Huge pages: a 1080p frame in 4 KiB pages costs thousands of page faults.
+        let mut ids = crate::memory::vec_with_capacity(n)
             .map_err(|_| refuse(format!("cannot allocate {} MiB for ids", (n * 4) >> 20)))?;
-        depth
-            .try_reserve_exact(n)
+        let mut depth = crate::memory::vec_with_capacity(n)
             .map_err(|_| refuse(format!("cannot allocate {} MiB for depths", (n * 4) >> 20)))?;
         ids.resize(n, BACKGROUND);
         depth.resize(n, f32::INFINITY);
+        Ok(Frame {
+            width: viewport.width,
+            height: viewport.height,
+            ids,
+            depth,
+        })
+    }
+
+    /// A frame of zero bits (ids 0, depths 0.0), or an error if it would not fit in
+    /// memory: for renderers whose buffers encode "nothing drawn" as zero. The memory
+    /// comes zeroed from the system, in huge pages where it has them, and nothing is
+    /// written here: each page is first touched where the renderer first writes it.
+    pub(crate) fn zeroed(viewport: Viewport) -> Result<Self> {
+        let n = viewport.pixel_count();
+        let refuse = |reason: String| Error::InvalidViewport {
+            width: u64::from(viewport.width),
+            height: u64::from(viewport.height),
+            reason,
+        };
+        check_fits(viewport, available_memory()).map_err(refuse)?;
+        let ids = crate::memory::zeroed_vec(n)
+            .ok_or_else(|| refuse(format!("cannot allocate {} MiB for ids", (n * 4) >> 20)))?;
+        let depth = crate::memory::zeroed_vec(n)
+            .ok_or_else(|| refuse(format!("cannot allocate {} MiB for depths", (n * 4) >> 20)))?;
         Ok(Frame {
             width: viewport.width,
             height: viewport.height,

@@ -6,14 +6,14 @@
 //! Warnock) use these, so they agree on coverage to the last pixel: that is what lets
 //! the test suite demand identical id images.
 
+#[cfg(target_arch = "x86_64")]
+pub mod avx512;
+pub mod block;
 mod coverage;
 mod depth_plane;
-pub mod depth_span;
-pub mod kernel;
+pub mod lanes;
 mod setup;
-#[cfg(target_arch = "x86_64")]
-pub mod simd;
 
 pub use coverage::{EdgeFunction, FillRule, PixelRect, PolygonCoverage, sample_rect};
 pub use depth_plane::DepthPlane;
-pub use setup::{NARROW_EDGES, NARROW_WIDTH, NarrowEdges, PolygonSetup, TriangleSetup, row_span};
+pub use setup::{PolygonSetup, TriangleSetup, row_span};

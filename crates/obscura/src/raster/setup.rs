@@ -388,129 +388,6 @@ impl TriangleSetup {
     }
 }
 
-/// Polygons at most this many pixels wide can use [`NarrowEdges`].
-pub const NARROW_WIDTH: u32 = 8;
-/// Polygons with at most this many edges can use [`NarrowEdges`].
-pub const NARROW_EDGES: usize = 8;
-
-/// The edges of a polygon at most [`NARROW_WIDTH`] pixels wide with the column part of
-/// each edge function evaluated once for the polygon's columns: a row then costs one
-/// subtraction and one comparison per edge and column, eight columns at a time.
-///
-/// For edge `e` and column `i` the test computes `t = sign * row_term(py) - columns`,
-/// with `columns = sign * (dy * (px - ox))`. That is `sign * raw(px, row_term)` bit
-/// for bit: `sign` is `±1`, negation is exact and rounding to nearest is symmetric.
-/// The sample is inside when `t > threshold`, the threshold being `0` for an edge that
-/// excludes its samples and the negative double nearest zero for one that includes
-/// them (no double lies between that and `-0`), which is the reference's
-/// `t > 0 || (t == 0 && include_zero)`, NaN included.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(32))]
-pub struct NarrowEdges {
-    pub(crate) columns: [[f64; 8]; NARROW_EDGES],
-    pub(crate) threshold: [f64; NARROW_EDGES],
-    pub(crate) sign: [f64; NARROW_EDGES],
-    pub(crate) dx: [f64; NARROW_EDGES],
-    pub(crate) oy: [f64; NARROW_EDGES],
-    pub(crate) count: usize,
-    /// Whether columns 4 to 7 are in use (else only the first four are computed).
-    pub(crate) wide: bool,
-    x0: u32,
-    lanes: u32,
-}
-
-impl Default for NarrowEdges {
-    fn default() -> Self {
-        NarrowEdges {
-            columns: [[0.0; 8]; NARROW_EDGES],
-            threshold: [0.0; NARROW_EDGES],
-            sign: [0.0; NARROW_EDGES],
-            dx: [0.0; NARROW_EDGES],
-            oy: [0.0; NARROW_EDGES],
-            count: 0,
-            wide: false,
-            x0: 0,
-            lanes: 0,
-        }
-    }
-}
-
-impl NarrowEdges {
-    /// Sets up the polygon of `setup`; `false` (and nothing covered) when it is wider
-    /// than [`NARROW_WIDTH`] pixels or has more than [`NARROW_EDGES`] edges.
-    #[inline(always)]
-    pub fn set(&mut self, edges: &[EdgeFunction], r: PixelRect) -> bool {
-        self.lanes = 0;
-        if r.is_empty() || r.x1 - r.x0 > NARROW_WIDTH || edges.len() > NARROW_EDGES {
-            return false;
-        }
-        self.x0 = r.x0;
-        self.lanes = (1u32 << (r.x1 - r.x0)) - 1;
-        self.count = edges.len();
-        // Columns beyond the rectangle are never used (masked by `lanes`), so four
-        // suffice for the many polygons at most four pixels wide.
-        self.wide = r.x1 - r.x0 > 4;
-        let used = if self.wide { 8 } else { 4 };
-        let mut px = [0.0; 8];
-        for (l, p) in px.iter_mut().enumerate() {
-            *p = f64::from(r.x0 + l as u32) + 0.5;
-        }
-        for (k, e) in edges.iter().enumerate() {
-            for (c, &x) in self.columns[k][..used].iter_mut().zip(&px) {
-                *c = e.sign * (e.dy * (x - e.ox));
-            }
-            self.threshold[k] = if e.include_zero {
-                -f64::from_bits(1)
-            } else {
-                0.0
-            };
-            self.sign[k] = e.sign;
-            self.dx[k] = e.dx;
-            self.oy[k] = e.oy;
-        }
-        true
-    }
-
-    /// The first column of the masks.
-    #[must_use]
-    pub fn x0(&self) -> u32 {
-        self.x0
-    }
-
-    /// The columns of the polygon's rectangle, as a mask.
-    #[must_use]
-    pub fn lanes(&self) -> u32 {
-        self.lanes
-    }
-
-    /// `sign * row_term` of edge `k` on the row through `py`.
-    #[inline(always)]
-    pub(crate) fn row(&self, k: usize, py: f64) -> f64 {
-        self.sign[k] * (self.dx[k] * (py - self.oy[k]))
-    }
-
-    /// The covered columns of row `j` (inside the polygon's rows), bit `i` for column
-    /// `x0 + i`.
-    #[inline(always)]
-    #[must_use]
-    pub fn row_mask(&self, j: u32) -> u32 {
-        let py = f64::from(j) + 0.5;
-        let mut inside = [true; 8];
-        let used = if self.wide { 8 } else { 4 };
-        for k in 0..self.count {
-            let row = self.row(k, py);
-            for (i, &c) in inside[..used].iter_mut().zip(&self.columns[k]) {
-                *i &= row - c > self.threshold[k];
-            }
-        }
-        let mut m = 0;
-        for (l, &i) in inside.iter().enumerate() {
-            m |= u32::from(i) << l;
-        }
-        m & self.lanes
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -546,7 +423,7 @@ mod tests {
         let mut setup = PolygonSetup::<16>::new();
         let mut tri = PolygonSetup::<3>::new();
         let (w, h) = (40u32, 30u32);
-        let (mut checked, mut narrow_checked) = (0, 0);
+        let mut checked = 0;
         for round in 0..3000 {
             let scale = [0.3, 2.0, 8.0, 40.0, 1e4][round % 5];
             let n = 3 + (round / 5) % 6;
@@ -597,20 +474,9 @@ mod tests {
                 }
                 assert_eq!(setup.row_mask(j, 0, w), mask, "{pts:?} row {j}");
                 assert_eq!(setup.row_mask(j, 5, 16), (mask >> 5) & 0xffff);
-                let mut narrow = NarrowEdges::default();
-                let r = setup.rect();
-                if narrow.set(setup.edges(), r) {
-                    assert!(r.x1 - r.x0 <= NARROW_WIDTH && setup.edges().len() <= NARROW_EDGES);
-                    if j >= r.y0 && j < r.y1 {
-                        let m = u64::from(narrow.row_mask(j)) << narrow.x0();
-                        assert_eq!(m, mask, "narrow {pts:?} row {j}");
-                    }
-                    narrow_checked += 1;
-                }
             }
         }
         assert!(checked > 1500, "{checked}");
-        assert!(narrow_checked > 5000, "{narrow_checked}");
     }
 
     #[test]

@@ -33,6 +33,12 @@ pub(super) fn thread_count() -> usize {
 #[cfg(feature = "parallel")]
 const PARALLEL_MIN: usize = 20_000;
 
+/// An empty vector with room for `n` elements, in huge pages when large (page faults
+/// of fresh 4 KiB pages cost more than the transform of the vertices they hold).
+fn huge_vec<T>(n: usize) -> Vec<T> {
+    crate::memory::vec_with_capacity(n).unwrap_or_else(|_| Vec::with_capacity(n))
+}
+
 /// One vertex: eye position, clip position, outcode, and the screen position when
 /// inside the view volume (NaN otherwise).
 #[inline(always)]
@@ -67,8 +73,8 @@ pub(super) fn transform_vertices(
         .iter()
         .map(|&(k, _)| t.view * scene.objects()[k].transform)
         .collect();
-    let mut vertices = Vec::with_capacity(total);
-    let mut codes = Vec::with_capacity(total);
+    let mut vertices = huge_vec(total);
+    let mut codes = huge_vec(total);
     #[cfg(feature = "parallel")]
     if threads > 1 && total >= PARALLEL_MIN {
         use rayon::prelude::*;
@@ -245,10 +251,10 @@ pub(super) fn process_faces(
     }
     let _ = threads;
     let mut out = FaceOutput {
-        starts: Vec::with_capacity(face_total + 1),
-        indices: Vec::with_capacity(face_total * 3),
-        faces: Vec::with_capacity(face_total),
-        objects: Vec::with_capacity(face_total),
+        starts: huge_vec(face_total + 1),
+        indices: huge_vec(face_total * 3),
+        faces: huge_vec(face_total),
+        objects: huge_vec(face_total),
         ..FaceOutput::default()
     };
     out.starts.push(0);
@@ -305,10 +311,10 @@ fn process_faces_parallel(ctx: &FaceContext<'_>, face_total: usize, threads: usi
     let polygons: usize = parts.iter().map(|p| p.faces.len()).sum();
     let index_count: usize = parts.iter().map(|p| p.indices.len()).sum();
     let mut out = FaceOutput {
-        starts: Vec::with_capacity(polygons + 1),
-        indices: Vec::with_capacity(index_count),
-        faces: Vec::with_capacity(polygons),
-        objects: Vec::with_capacity(polygons),
+        starts: huge_vec(polygons + 1),
+        indices: huge_vec(index_count),
+        faces: huge_vec(polygons),
+        objects: huge_vec(polygons),
         ..FaceOutput::default()
     };
     out.starts.push(0);

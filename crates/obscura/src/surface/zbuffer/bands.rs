@@ -1,21 +1,19 @@
-//! Bands of rows as units of work: polygons are binned by the rows they span, then
-//! each band draws its polygons, in ascending order, into its own rows of the frame.
+//! Bands of rows as units of parallel work: polygons are binned by the rows they span,
+//! then each band draws its polygons into its own rows of the frame and resolves them.
 //!
-//! A pixel belongs to one band, and its band meets the polygons covering it in the
-//! same order as the single-threaded loop: the frame is identical whatever the number
-//! of bands or threads. A band of 64 rows of a 1920-pixel frame (keys and ids, 1 MB)
-//! stays in the core's L2 cache while its polygons are drawn.
+//! A pixel belongs to one band, and its key and the depth test depend on the polygon
+//! and the pixel only (not on the order of drawing): the frame is identical whatever
+//! the number of bands or threads.
 
 use crate::Frame;
 use crate::raster::FillRule;
-use crate::raster::kernel::DepthTarget;
 use crate::view::PreparedView;
 
 use super::Counts;
-use super::fast::{Band, Kernel, draw_band, keys_to_depths_rows};
+use super::fast::{Band, Kernel, TILE, draw_band};
 
-/// Rows per band.
-pub(super) const BAND_ROWS: u32 = 64;
+/// Rows per band: one row of tiles.
+pub(super) const BAND_ROWS: u32 = TILE;
 
 /// Threads available to the z-buffer: rayon's current pool with the `parallel`
 /// feature, else 1.
@@ -66,49 +64,8 @@ fn bin(view: &PreparedView<'_>, range: std::ops::Range<usize>, bands: usize) -> 
     lists
 }
 
-/// Whether drawing band by band pays on one thread: when polygons are large (their
-/// boxes average more than [`LARGE_BOX`] pixels, estimated on a sample), each band's
-/// keys and ids stay in cache while many polygons overdraw them; small polygons gain
-/// little and pay the binning and the setup of those that straddle bands.
-pub(super) fn prefers_bands(view: &PreparedView<'_>) -> bool {
-    let n = view.polygon_count();
-    if n == 0 {
-        return false;
-    }
-    let (starts, indices, _) = view.polygon_arrays();
-    let vertices = view.vertices();
-    let vp = view.viewport();
-    let (w, h) = (f64::from(vp.width), f64::from(vp.height));
-    let stride = n.div_ceil(SAMPLE).max(1);
-    let (mut area, mut count) = (0.0, 0usize);
-    for p in (0..n).step_by(stride) {
-        let (s, e) = (starts[p] as usize, starts[p + 1] as usize);
-        let (mut x0, mut y0, mut x1, mut y1) = (w, h, 0.0f64, 0.0f64);
-        for &i in &indices[s..e] {
-            let v = &vertices[i as usize];
-            x0 = x0.min(v.x);
-            y0 = y0.min(v.y);
-            x1 = x1.max(v.x);
-            y1 = y1.max(v.y);
-        }
-        let box_area = (x1.min(w) - x0.max(0.0)).max(0.0) * (y1.min(h) - y0.max(0.0)).max(0.0);
-        if box_area.is_finite() {
-            area += box_area;
-        }
-        count += 1;
-    }
-    area > LARGE_BOX * count as f64
-}
-
-/// Polygons sampled by [`prefers_bands`].
-const SAMPLE: usize = 4096;
-
-/// The mean box area, in pixels, above which one thread draws band by band.
-const LARGE_BOX: f64 = 2048.0;
-
 /// Draws the view into the frame band by band, on `threads` threads when the
-/// `parallel` feature is on (else, or with one thread, in order on this one), converting
-/// each band's keys to depths while they are in cache.
+/// `parallel` feature is on (else, or with one thread, in order on this one).
 pub(super) fn draw_banded(
     view: &PreparedView<'_>,
     fill: FillRule,
@@ -123,25 +80,17 @@ pub(super) fn draw_banded(
     let per = n.div_ceil(chunks).max(1);
     let ranges: Vec<std::ops::Range<usize>> =
         (0..n).step_by(per).map(|s| s..(s + per).min(n)).collect();
-    let t = *view.transform();
     let rows = BAND_ROWS as usize * width as usize;
     let draw = |b: usize, keys: &mut [f32], ids: &mut [u32], lists: &[Vec<Vec<u32>>]| {
-        let y0 = b as u32 * BAND_ROWS;
         let mut band = Band {
-            target: DepthTarget {
-                keys,
-                ids,
-                width: width as usize,
-                y0,
-            },
-            y1: (y0 + BAND_ROWS).min(height),
+            keys,
+            ids,
             width,
             height,
+            y0: b as u32 * BAND_ROWS,
         };
         let polys = lists.iter().flat_map(|l| l[b].iter().map(|&p| p as usize));
-        let c = draw_band(view, polys, fill, kernel, &mut band);
-        keys_to_depths_rows(&t, kernel, band.target.keys, band.target.ids);
-        c
+        draw_band(view, polys, fill, kernel, &mut band)
     };
     #[cfg(feature = "parallel")]
     if threads > 1 {

@@ -1,28 +1,34 @@
-//! The fast z-buffer's drawing loop: polygons of a view drawn into a band of rows of the
-//! frame, with the kernels compiled for the processor's vector extensions.
+//! The fast z-buffer's drawing loop: the polygons of a view drawn into a band of rows
+//! of the frame, with the block rasterizer ([`crate::raster::block`]) compiled for the
+//! processor's vector extensions.
 //!
-//! The band's depth array holds negated `f32` keys (see [`crate::raster::depth_span`])
-//! until [`keys_to_depths`] turns them into eye-space depths.
+//! Per band, one pass over its polygons: each is set up once; a small one is drawn at
+//! once, a big one (wider or taller than [`BIG`] pixels) is put in the bins of the
+//! 64x64 tiles it overlaps. Then each tile draws its big polygons while its keys and ids
+//! (32 KiB) stay in the first-level cache, nearest first, skipping the blocks that hide
+//! them (see [`crate::raster::block::BlockTarget::with_farthest`]), and turns its keys
+//! and encoded ids into depths and face ids. The depth test takes the nearer key and, on a tie, the lower
+//! face id, so drawing small polygons before big ones gives the frame that drawing
+//! all in order would.
 
 use crate::Frame;
-use crate::frame::BACKGROUND;
-use crate::raster::kernel::{DepthTarget, Portable, RasterKernel, is_narrow};
 #[cfg(target_arch = "x86_64")]
-use crate::raster::simd::Avx2;
-use crate::raster::{DepthPlane, EdgeFunction, FillRule, PixelRect, PolygonSetup, TriangleSetup};
+use crate::raster::avx512::Avx512;
+use crate::raster::block::{self, Align, BlockSetup, BlockTarget, Counts};
+use crate::raster::lanes::{DepthOfKey, Lanes, Portable, lanes_below};
+use crate::raster::{FillRule, PixelRect, PolygonCoverage, PolygonSetup};
 use crate::view::{PreparedView, ViewTransform};
 
-use super::Counts;
-
-/// Which compiled variant of the drawing kernels to run. Every variant is the same
-/// source compiled with different instruction sets: they give identical frames.
+/// Which compiled variant of the drawing kernels to run. Every variant runs the same
+/// operations in the same order: they give identical frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Kernel {
     /// Baseline instructions of the target (SSE2 on x86-64); always available.
     Portable,
-    /// x86-64 with AVX2 (4 doubles or 8 floats per instruction).
+    /// The portable lanes compiled for x86-64 with AVX2 (the compiler vectorizes them).
     Avx2,
-    /// x86-64 with AVX-512 F, VL, BW and DQ (8 doubles or 16 floats per instruction).
+    /// x86-64 with AVX-512 F, VL, BW and DQ: eight doubles per instruction, masks in
+    /// mask registers.
     Avx512,
 }
 
@@ -42,127 +48,401 @@ impl Kernel {
         match self {
             Kernel::Portable => true,
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => Avx2::new().is_some(),
+            Kernel::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => {
-                Avx2::new().is_some()
-                    && std::arch::is_x86_feature_detected!("avx512f")
-                    && std::arch::is_x86_feature_detected!("avx512vl")
-                    && std::arch::is_x86_feature_detected!("avx512bw")
-                    && std::arch::is_x86_feature_detected!("avx512dq")
-            }
+            Kernel::Avx512 => Avx512::new().is_some(),
             #[cfg(not(target_arch = "x86_64"))]
             _ => false,
         }
     }
 }
 
-/// Rows `y0..y1` of a frame: the keys (negated, see the module doc) and ids.
+/// Side of a tile, in pixels: a tile's keys and ids take 32 KiB.
+pub(super) const TILE: u32 = 64;
+
+/// Polygons wider or taller than this many pixels are drawn tile by tile.
+const BIG: u32 = 64;
+
+/// Marks a bin entry that indexes the big polygons other than triangles.
+const OTHER: u32 = 1 << 31;
+
+/// Rows `y0..y1` of a frame being drawn: keys and encoded ids (see
+/// [`crate::raster::lanes`]), `width` pixels per row.
 pub(super) struct Band<'a> {
-    pub target: DepthTarget<'a>,
-    pub y1: u32,
+    pub keys: &'a mut [f32],
+    pub ids: &'a mut [u32],
     pub width: u32,
     pub height: u32,
+    pub y0: u32,
 }
 
-/// Draws the rows of the band of one set-up polygon: narrow ones by masks of their
-/// columns, wide ones by row spans.
+/// The keys and encoded ids of one tile, aligned so that a row of a 16-pixel block is
+/// one cache line.
+#[repr(C, align(64))]
+struct TileBuffer {
+    keys: [f32; (TILE * TILE) as usize],
+    ids: [u32; (TILE * TILE) as usize],
+    /// Per block of 16 x 8 pixels, the smallest (farthest) key it holds.
+    farthest: [f32; FAR_BLOCKS],
+}
+
+/// Columns of a block of the grid (`2 BLOCK`).
+const FAR_W: usize = 2 * block::BLOCK as usize;
+
+/// Blocks of the grid per tile.
+const FAR_BLOCKS: usize = (TILE * TILE) as usize / (FAR_W * block::BLOCK as usize);
+
+/// The smallest key of each `FAR_W x BLOCK` block of a tile's keys (row after row of
+/// `TILE` keys), into `farthest`. Rows past `rows` count as empty (key 0).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn draw_polygon<K: RasterKernel>(
-    kernel: K,
-    band: &mut Band<'_>,
-    c: &mut Counts,
-    edges: &[EdgeFunction],
-    rect: PixelRect,
-    plane: Option<DepthPlane>,
+fn farthest_keys(keys: &[f32], rows: usize, farthest: &mut [f32; FAR_BLOCKS]) {
+    const T: usize = TILE as usize;
+    const B: usize = block::BLOCK as usize;
+    for (k, far) in farthest.iter_mut().enumerate() {
+        let (by, bx) = ((k / (T / FAR_W)) * B, (k % (T / FAR_W)) * FAR_W);
+        if by + B > rows {
+            *far = 0.0;
+            continue;
+        }
+        // Lane-wise minima (vector instructions), reduced at the end.
+        let mut m = [f32::INFINITY; FAR_W];
+        for y in by..by + B {
+            let row = &keys[y * T + bx..y * T + bx + FAR_W];
+            for (m, &v) in m.iter_mut().zip(row) {
+                *m = if v < *m { v } else { *m };
+            }
+        }
+        *far = m.into_iter().fold(f32::INFINITY, f32::min);
+    }
+}
+
+/// A polygon ready to draw.
+#[derive(Clone)]
+enum Setup {
+    Triangle(BlockSetup<3>),
+    Quad(BlockSetup<4>),
+    /// Five to [`block::MAX_EDGES`] edges.
+    Polygon(BlockSetup<8>),
+    /// More edges: drawn row span by row span (the setup has no edges; it carries the
+    /// rectangle and the plane).
+    Spans(PolygonCoverage, BlockSetup<0>),
+}
+
+impl Setup {
+    /// [`block::nearest_key`] over its rectangle (NaN sorts it anywhere).
+    fn nearest_key(&self) -> f32 {
+        let r = self.rect();
+        match self {
+            Setup::Triangle(s) => block::nearest_key(s, r),
+            Setup::Quad(s) => block::nearest_key(s, r),
+            Setup::Polygon(s) => block::nearest_key(s, r),
+            Setup::Spans(_, s) => block::nearest_key(s, r),
+        }
+    }
+
+    fn rect(&self) -> PixelRect {
+        match self {
+            Setup::Triangle(s) => s.rect,
+            Setup::Quad(s) => s.rect,
+            Setup::Polygon(s) => s.rect,
+            Setup::Spans(_, s) => s.rect,
+        }
+    }
+}
+
+/// The setup of polygon `p` of the view, `None` when it covers no sample (as the
+/// reference decides).
+#[inline(always)]
+fn setup(
+    view: &PreparedView<'_>,
+    p: usize,
+    fill: FillRule,
+    width: u32,
+    height: u32,
+    scratch: &mut PolygonSetup<16>,
+) -> Option<Setup> {
+    let (starts, indices, _) = view.polygon_arrays();
+    let vertices = view.vertices();
+    let (s, e) = (starts[p] as usize, starts[p + 1] as usize);
+    let point = |i: u32| {
+        let v = &vertices[i as usize];
+        (v.x, v.y, v.zq)
+    };
+    if let &[a, b, c] = &indices[s..e] {
+        return block::triangle([point(a), point(b), point(c)], fill, width, height)
+            .map(Setup::Triangle);
+    }
+    if PolygonSetup::<16>::fits(e - s) {
+        let mut points = [(0.0, 0.0, 0.0); 16];
+        for (q, &i) in points.iter_mut().zip(&indices[s..e]) {
+            *q = point(i);
+        }
+        if !scratch.set(&points[..e - s], fill, width, height) {
+            return None;
+        }
+        let plane = scratch.depth_plane()?;
+        let (edges, rect) = (scratch.edges(), scratch.rect());
+        if edges.len() <= 4 {
+            return BlockSetup::new(edges, rect, &plane).map(Setup::Quad);
+        }
+        if let Some(b) = BlockSetup::new(edges, rect, &plane) {
+            return Some(Setup::Polygon(b));
+        }
+    }
+    // Rare: more edges than a block setup holds. The shared coverage, with its
+    // allocations.
+    let poly = view.polygon(p);
+    let cov = poly.coverage(fill, width, height)?;
+    let plane = poly.depth_plane()?;
+    let carrier = BlockSetup::new(&[], cov.rect(), &plane)?;
+    Some(Setup::Spans(cov, carrier))
+}
+
+/// Draws a polygon of [`Setup::Spans`] in `region`: row spans of the shared coverage,
+/// each pixel depth-tested with the key and test of the block rasterizer.
+#[inline(always)]
+fn draw_spans<L: Lanes>(
+    l: L,
+    cov: &PolygonCoverage,
+    s: &BlockSetup<0>,
+    region: PixelRect,
+    target: &mut BlockTarget<'_>,
     face: u32,
+    counts: &mut Counts,
 ) {
-    let Some(plane) = plane else {
-        return;
-    };
-    let y0 = band.target.y0;
-    // A polygon spanning several bands is counted by the band of its first row.
-    if rect.y0 >= y0 && rect.y0 < band.y1 {
-        c.drawn += 1;
+    let t = target.rect();
+    for y in region.y0.max(s.rect.y0).max(t.y0)..region.y1.min(s.rect.y1).min(t.y1) {
+        let Some((a, b)) = cov.row_span(y) else {
+            continue;
+        };
+        let (a, b) = (a.max(region.x0).max(t.x0), b.min(region.x1).min(t.x1));
+        let mut x = a;
+        while x < b {
+            let n = (b - x).min(8);
+            let mut z = [0.0; 8];
+            for (k, zk) in z.iter_mut().enumerate() {
+                *zk = s.key(x + k as u32, y);
+            }
+            let (keys, ids) = target.row_mut(x, y, n as usize);
+            // SAFETY: the slices hold the `n` pixels of the mask.
+            let taken =
+                unsafe { l.depth_test8(keys, ids, 0, lanes_below(n as usize), l.load(&z), face) };
+            counts.tested += u64::from(n);
+            counts.written += u64::from(taken.count_ones());
+            x += n;
+        }
     }
-    let rows = rect.y0.max(y0)..rect.y1.min(band.y1);
-    if rows.is_empty() {
-        return;
-    }
-    let s = if is_narrow(edges, rect) {
-        kernel.draw_narrow(edges, rect, rows, &plane, &mut band.target, face)
-    } else {
-        kernel.draw_wide(edges, rect, rows, &plane, &mut band.target, face)
-    };
-    c.tested += s.tested;
-    c.written += s.written;
 }
 
-/// Draws polygons `polygons` (indices into the view, ascending) into the band.
+/// Draws a set-up polygon in `region`.
 #[inline(always)]
-fn draw_band_impl<K: RasterKernel>(
-    kernel: K,
+fn draw_setup<L: Lanes>(
+    l: L,
+    setup: &Setup,
+    region: PixelRect,
+    align: Align,
+    target: &mut BlockTarget<'_>,
+    face: u32,
+    counts: &mut Counts,
+) {
+    match setup {
+        Setup::Triangle(s) => block::draw(l, s, region, align, target, face, counts),
+        Setup::Quad(s) => block::draw(l, s, region, align, target, face, counts),
+        Setup::Polygon(s) => block::draw(l, s, region, align, target, face, counts),
+        Setup::Spans(cov, s) => draw_spans(l, cov, s, region, target, face, counts),
+    }
+}
+
+/// Draws polygons `polygons` (indices into the view) into the band, then resolves the
+/// band's keys and ids into depths and face ids.
+#[inline(always)]
+fn draw_band_impl<L: Lanes>(
+    l: L,
     view: &PreparedView<'_>,
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
     band: &mut Band<'_>,
-) -> Counts {
-    let (starts, indices, faces) = view.polygon_arrays();
+) -> super::Counts {
+    let (_, _, faces) = view.polygon_arrays();
+    let (width, height, y0) = (band.width, band.height, band.y0);
+    let w = width as usize;
+    let Some(mut target) = BlockTarget::new(&mut *band.keys, &mut *band.ids, w, 0, y0) else {
+        return super::Counts::default();
+    };
+    let whole = target.rect();
+    let y1 = whole.y1;
+    let tiles_x = width.div_ceil(TILE) as usize;
+    let tiles_y = (y1 - y0).div_ceil(TILE) as usize;
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); tiles_x * tiles_y];
+    // Big polygons: triangles (bin entries below OTHER), and the others.
+    // Each with its face and its nearest key.
+    let mut big_triangles: Vec<(BlockSetup<3>, u32, f32)> = Vec::new();
+    let mut big: Vec<(Setup, u32, f32)> = Vec::new();
+    let (starts, indices, _) = view.polygon_arrays();
     let vertices = view.vertices();
-    let (width, height) = (band.width, band.height);
-    let mut polygon = PolygonSetup::<16>::new();
-    let mut points = [(0.0, 0.0, 0.0); 16];
-    let mut c = Counts::default();
+    let is_big = |r: PixelRect| r.x1 - r.x0 > BIG || r.y1 - r.y0 > BIG;
+    let tiles_of = |r: PixelRect| {
+        let (tx0, tx1) = (r.x0 / TILE, (r.x1 - 1) / TILE + 1);
+        let (ty0, ty1) = (
+            (r.y0.max(y0) - y0) / TILE,
+            (r.y1.min(y1) - 1 - y0) / TILE + 1,
+        );
+        (tx0 as usize..tx1 as usize, ty0 as usize..ty1 as usize)
+    };
+    let mut scratch = PolygonSetup::<16>::new();
+    let mut counts = Counts::default();
+    let mut drawn = 0u64;
     for p in polygons {
-        let (s, e) = (starts[p] as usize, starts[p + 1] as usize);
-        let face = faces[p];
-        let point = |i: u32| {
-            let v = &vertices[i as usize];
-            (v.x, v.y, v.zq)
-        };
-        if let &[a, b, d] = &indices[s..e] {
-            let Some(t) = TriangleSetup::new([point(a), point(b), point(d)], fill, width, height)
+        let (a, b) = (starts[p] as usize, starts[p + 1] as usize);
+        if let &[i, j, k] = &indices[a..b] {
+            // Triangles, most polygons of most scenes: set up and drawn without the
+            // general path's enum.
+            let point = |i: u32| {
+                let v = &vertices[i as usize];
+                (v.x, v.y, v.zq)
+            };
+            let Some(t) = block::triangle([point(i), point(j), point(k)], fill, width, height)
             else {
                 continue;
             };
-            draw_polygon(kernel, band, &mut c, &t.edges, t.rect, Some(t.plane), face);
-        } else if PolygonSetup::<16>::fits(e - s) {
-            let n = e - s;
-            for (q, &i) in points.iter_mut().zip(&indices[s..e]) {
-                *q = point(i);
+            let rect = t.rect;
+            if rect.y0 >= y0 && rect.y0 < y1 {
+                drawn += 1;
             }
-            if !polygon.set(&points[..n], fill, width, height) {
+            if rect.y1 <= y0 || rect.y0 >= y1 {
                 continue;
             }
-            let t = &polygon;
-            draw_polygon(
-                kernel,
-                band,
-                &mut c,
-                t.edges(),
-                t.rect(),
-                t.depth_plane(),
-                face,
-            );
+            let face = !faces[p];
+            if is_big(rect) {
+                let n = big_triangles.len() as u32;
+                big_triangles.push((t, face, block::nearest_key(&t, rect)));
+                let (xs, ys) = tiles_of(rect);
+                for ty in ys {
+                    for bin in &mut bins[ty * tiles_x..][xs.clone()] {
+                        bin.push(n);
+                    }
+                }
+            } else {
+                block::draw(l, &t, whole, Align::Polygon, &mut target, face, &mut counts);
+            }
+            continue;
+        }
+        let Some(s) = setup(view, p, fill, width, height, &mut scratch) else {
+            continue;
+        };
+        let rect = s.rect();
+        // A polygon reaching several bands is counted by the band of its first row.
+        if rect.y0 >= y0 && rect.y0 < y1 {
+            drawn += 1;
+        }
+        if rect.y1 <= y0 || rect.y0 >= y1 {
+            continue;
+        }
+        let face = !faces[p];
+        if is_big(rect) {
+            let n = OTHER | big.len() as u32;
+            let near = s.nearest_key();
+            big.push((s, face, near));
+            let (xs, ys) = tiles_of(rect);
+            for ty in ys {
+                for bin in &mut bins[ty * tiles_x..][xs.clone()] {
+                    bin.push(n);
+                }
+            }
         } else {
-            // Rare: more than 16 vertices. The shared coverage, with its allocations.
-            let poly = view.polygon(p);
-            let Some(cov) = poly.coverage(fill, width, height) else {
-                continue;
-            };
-            draw_polygon(
-                kernel,
-                band,
-                &mut c,
-                cov.edges(),
-                cov.rect(),
-                poly.depth_plane(),
-                face,
-            );
+            draw_setup(l, &s, whole, Align::Polygon, &mut target, face, &mut counts);
         }
     }
-    c
+    let depth = depth_of_key(view.transform());
+    let mut tile_buffer = Box::new(TileBuffer {
+        keys: [0.0; (TILE * TILE) as usize],
+        ids: [0; (TILE * TILE) as usize],
+        farthest: [0.0; FAR_BLOCKS],
+    });
+    let (keys, ids) = (&mut *band.keys, &mut *band.ids);
+    for ty in 0..tiles_y as u32 {
+        for tx in 0..tiles_x as u32 {
+            let tile = PixelRect {
+                x0: tx * TILE,
+                y0: y0 + ty * TILE,
+                x1: ((tx + 1) * TILE).min(width),
+                y1: (y0 + (ty + 1) * TILE).min(y1),
+            };
+            let n = (tile.x1 - tile.x0) as usize;
+            if bins[ty as usize * tiles_x + tx as usize].is_empty() {
+                for y in tile.y0..tile.y1 {
+                    let at = (y - y0) as usize * w + tile.x0 as usize;
+                    l.resolve_in_place(&mut keys[at..at + n], &mut ids[at..at + n], depth);
+                }
+                continue;
+            }
+            // The tile's pixels into the aligned buffer, its big polygons drawn there
+            // (in cache), then resolved back into the frame.
+            let tb = &mut *tile_buffer;
+            for y in tile.y0..tile.y1 {
+                let at = (y - y0) as usize * w + tile.x0 as usize;
+                let t = (y - tile.y0) as usize * TILE as usize;
+                tb.keys[t..t + n].copy_from_slice(&keys[at..at + n]);
+                tb.ids[t..t + n].copy_from_slice(&ids[at..at + n]);
+            }
+            let rows = (tile.y1 - tile.y0) as usize * TILE as usize;
+            // Columns past the image's edge hold stale keys: no block there is culled.
+            if n == TILE as usize {
+                farthest_keys(&tb.keys, (tile.y1 - tile.y0) as usize, &mut tb.farthest);
+            } else {
+                tb.farthest = [0.0; FAR_BLOCKS];
+            }
+            let Some(t) = BlockTarget::new(
+                &mut tb.keys[..rows],
+                &mut tb.ids[..rows],
+                TILE as usize,
+                tile.x0,
+                tile.y0,
+            ) else {
+                continue;
+            };
+            let mut t = t.with_farthest(&mut tb.farthest);
+            // Nearest first, so the blocks they fill hide the polygons behind them.
+            let bin = &mut bins[ty as usize * tiles_x + tx as usize];
+            let near = |k: u32| {
+                if k & OTHER == 0 {
+                    big_triangles[k as usize].2
+                } else {
+                    big[(k & !OTHER) as usize].2
+                }
+            };
+            bin.sort_unstable_by(|&a, &b| near(b).total_cmp(&near(a)));
+            for &k in bin.iter() {
+                if k & OTHER == 0 {
+                    let (s, face, _) = &big_triangles[k as usize];
+                    block::draw(l, s, tile, Align::Grid, &mut t, *face, &mut counts);
+                } else {
+                    let (s, face, _) = &big[(k & !OTHER) as usize];
+                    draw_setup(l, s, tile, Align::Grid, &mut t, *face, &mut counts);
+                }
+            }
+            block::resolve(l, &t, tile, keys, ids, w, y0, depth);
+        }
+    }
+    super::Counts {
+        drawn,
+        tested: counts.tested,
+        written: counts.written,
+    }
+}
+
+/// How keys become depths for this view.
+fn depth_of_key(t: &ViewTransform) -> DepthOfKey {
+    if t.orthographic {
+        DepthOfKey::Orthographic {
+            far: t.far,
+            range: t.far - t.near,
+        }
+    } else {
+        DepthOfKey::Perspective {
+            near: t.near as f32,
+        }
+    }
 }
 
 fn draw_band_portable(
@@ -170,54 +450,56 @@ fn draw_band_portable(
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
     band: &mut Band<'_>,
-) -> Counts {
+) -> super::Counts {
     draw_band_impl(Portable, view, polygons, fill, band)
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,popcnt,bmi1,lzcnt")]
+#[target_feature(enable = "avx2")]
 fn draw_band_avx2(
-    kernel: Avx2,
     view: &PreparedView<'_>,
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
     band: &mut Band<'_>,
-) -> Counts {
-    draw_band_impl(kernel, view, polygons, fill, band)
+) -> super::Counts {
+    draw_band_impl(Portable, view, polygons, fill, band)
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,popcnt,bmi1,lzcnt,avx512f,avx512vl,avx512bw,avx512dq")]
+#[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
 fn draw_band_avx512(
-    kernel: Avx2,
+    l: Avx512,
     view: &PreparedView<'_>,
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
     band: &mut Band<'_>,
-) -> Counts {
-    draw_band_impl(kernel, view, polygons, fill, band)
+) -> super::Counts {
+    draw_band_impl(l, view, polygons, fill, band)
 }
 
 /// Draws `polygons` into the band with the kernel (the portable one if the processor
-/// lacks the kernel's instructions).
+/// lacks the kernel's instructions), and resolves the band.
 pub(super) fn draw_band(
     view: &PreparedView<'_>,
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
     kernel: Kernel,
     band: &mut Band<'_>,
-) -> Counts {
+) -> super::Counts {
     #[cfg(target_arch = "x86_64")]
-    if let Some(avx2) = Avx2::new() {
-        match kernel {
-            // SAFETY: `Avx2::new` checked AVX2, POPCNT, BMI1 and LZCNT.
-            Kernel::Avx2 => return unsafe { draw_band_avx2(avx2, view, polygons, fill, band) },
-            // SAFETY: the same, and AVX-512 F, VL, BW and DQ just checked.
-            Kernel::Avx512 if kernel.is_available() => {
-                return unsafe { draw_band_avx512(avx2, view, polygons, fill, band) };
+    match kernel {
+        Kernel::Avx512 => {
+            if let Some(l) = Avx512::new() {
+                // SAFETY: `Avx512::new` checked AVX-512 F, VL, BW and DQ, which imply
+                // AVX2; POPCNT, BMI1, BMI2 and LZCNT come with every AVX-512 processor.
+                return unsafe { draw_band_avx512(l, view, polygons, fill, band) };
             }
-            _ => {}
         }
+        Kernel::Avx2 if kernel.is_available() => {
+            // SAFETY: AVX2 just checked.
+            return unsafe { draw_band_avx2(view, polygons, fill, band) };
+        }
+        _ => {}
     }
     draw_band_portable(view, polygons, fill, band)
 }
@@ -228,64 +510,13 @@ pub(super) fn draw_all(
     fill: FillRule,
     kernel: Kernel,
     frame: &mut Frame,
-) -> Counts {
+) -> super::Counts {
     let mut band = Band {
-        target: DepthTarget {
-            keys: &mut frame.depth,
-            ids: &mut frame.ids,
-            width: frame.width as usize,
-            y0: 0,
-        },
-        y1: frame.height,
+        keys: &mut frame.depth,
+        ids: &mut frame.ids,
         width: frame.width,
         height: frame.height,
+        y0: 0,
     };
     draw_band(view, 0..view.polygon_count(), fill, kernel, &mut band)
-}
-
-/// Turns the negated keys of a drawn frame into eye-space depths (`+inf` where the id
-/// is the background), as the reference does.
-#[inline(always)]
-fn keys_to_depths_impl(t: &ViewTransform, depth: &mut [f32], ids: &[u32]) {
-    let (near, far) = (t.near, t.far);
-    if t.orthographic {
-        for (d, &id) in depth.iter_mut().zip(ids) {
-            let z = f64::from(-*d);
-            let v = (far - z * (far - near)) as f32;
-            *d = if id != BACKGROUND { v } else { f32::INFINITY };
-        }
-    } else {
-        for (d, &id) in depth.iter_mut().zip(ids) {
-            let v = (near / f64::from(-*d)) as f32;
-            *d = if id != BACKGROUND { v } else { f32::INFINITY };
-        }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn keys_to_depths_avx2(t: &ViewTransform, depth: &mut [f32], ids: &[u32]) {
-    keys_to_depths_impl(t, depth, ids);
-}
-
-/// Converts rows of keys to depths with the kernel.
-pub(super) fn keys_to_depths_rows(
-    t: &ViewTransform,
-    kernel: Kernel,
-    depth: &mut [f32],
-    ids: &[u32],
-) {
-    match kernel {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: both kernels imply AVX2, checked just before the call.
-        Kernel::Avx2 | Kernel::Avx512 if Kernel::Avx2.is_available() => unsafe {
-            keys_to_depths_avx2(t, depth, ids);
-        },
-        _ => keys_to_depths_impl(t, depth, ids),
-    }
-}
-
-/// Converts a whole frame's keys to depths.
-pub(super) fn keys_to_depths(t: &ViewTransform, kernel: Kernel, frame: &mut Frame) {
-    keys_to_depths_rows(t, kernel, &mut frame.depth, &frame.ids);
 }

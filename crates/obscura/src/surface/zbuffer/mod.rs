@@ -15,23 +15,42 @@
 //! - Complexity: O(P s), P polygons of s pixels each, about O(p) for p pixels
 //!   (seed 000's table).
 //!
-//! # Two implementations, one result
+//! # Two implementations, one picture
 //! [`render_reference`] is the seeds' algorithm written plainly, one
-//! [`PolygonCoverage`](crate::raster::PolygonCoverage) per polygon. [`render`] computes
-//! the same frame (ids, depths and stats bit for bit; the tests check it on random
-//! scenes) faster:
-//! - polygon setup without allocation ([`PolygonSetup`](crate::raster::PolygonSetup)),
-//!   rejecting polygons whose box holds no sample before any edge is set up;
-//! - narrow polygons tested pixel by pixel over their box, wide ones by row spans;
-//! - the incremental depth computed in exact linear runs, eight pixels at a time
-//!   ([`crate::raster::depth_span`]);
-//! - the frame's depth array used as the buffer (no second buffer);
+//! [`PolygonCoverage`](crate::raster::PolygonCoverage) per polygon, the depth stepped
+//! serially along each span. [`render`] computes the same picture faster with the block
+//! rasterizer of [`crate::raster::block`]:
+//! - coverage by the same canonical edge expression, bit for bit, 8x8 blocks classified
+//!   exactly by their corners (covered blocks drawn without edge tests);
+//! - the depth key evaluated per pixel from the plane (no serial chain, so any pixel
+//!   in any order, eight or sixteen per instruction) instead of stepped along the span;
+//! - the depth test takes the nearer key and, on an exactly equal key, the lower face
+//!   id, so the drawing order does not matter: small polygons are drawn at once, big
+//!   ones tile by tile (64x64 pixels whose buffers stay in the first-level cache);
+//! - occlusion culling of the big polygons: per 16x8 block of a tile the farthest key
+//!   it holds, kept up to date as blocks are written; a tile's big polygons are drawn
+//!   nearest first and skip the blocks whose farthest key is nearer than any of
+//!   theirs (exact: such a polygon wins no pixel there, not even a tie; Greene, Kass
+//!   and Miller, *Hierarchical Z-buffer visibility*, SIGGRAPH 1993);
+//! - a frame of zero bits as the empty buffer (fresh pages, nothing to clear);
 //! - the kernels compiled for AVX2 or AVX-512 when the processor has them (chosen at
-//!   run time; the same code, so the same results, as the portable build);
+//!   run time; the same operations in the same order, so the same bits, as the
+//!   portable build: the tests compare them);
 //! - with the `parallel` feature and more than one thread, the image cut into bands of
-//!   rows drawn in parallel, each band drawing its polygons in ascending order; on one
-//!   thread, bands too when the polygons are large (each band's buffers stay in cache
-//!   while the polygons overdraw them).
+//!   rows drawn in parallel (the same frame as one thread: a pixel's result depends on
+//!   the polygons covering it only).
+//!
+//! # Tolerance
+//! The per-pixel plane and the reference's serial stepping differ by a few units in
+//! the last place of the `f64` key, so after rounding to `f32` a key may differ by one
+//! unit of the `f32`. Hence the fast frame's ids equal the reference's at every pixel
+//! except where the two nearest polygons' keys are within two units of an `f32`
+//! (relative `2 f32::EPSILON`; a brute-force oracle over all polygons checks every
+//! differing pixel in the tests), and its depths are within that relative tolerance of
+//! the reference's. Coverage and the polygons drawn are exactly the reference's; the
+//! pixels tested are fewer (culled blocks are not tested) and the pixels written may
+//! differ (they count overwrites, which depend on the order). Keys at or below zero (degenerate cameras only: keys of a prepared view
+//! are positive) are clamped to the smallest positive `f32` by the fast path.
 
 mod bands;
 mod fast;
@@ -58,7 +77,7 @@ pub fn render_with(
     kernel: Kernel,
     threads: usize,
 ) -> Result<(Frame, Stats)> {
-    let schedule = if threads > 1 || bands::prefers_bands(view) {
+    let schedule = if threads > 1 {
         Schedule::Bands
     } else {
         Schedule::Whole
@@ -69,9 +88,9 @@ pub fn render_with(
 /// How the frame is cut into units of work.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Schedule {
-    /// The whole frame at once: every polygon once, in order.
+    /// The whole frame at once: every polygon once.
     Whole,
-    /// Bands of rows, each with the polygons that reach it, in order.
+    /// Bands of rows, each with the polygons that reach it.
     Bands,
 }
 
@@ -82,13 +101,11 @@ fn render_scheduled(
     threads: usize,
     schedule: Schedule,
 ) -> Result<(Frame, Stats)> {
-    let mut frame = Frame::new(view.viewport())?;
+    let mut frame = Frame::zeroed(view.viewport())?;
     let counts = if schedule == Schedule::Bands {
         bands::draw_banded(view, options.fill_rule, kernel, threads, &mut frame)
     } else {
-        let c = fast::draw_all(view, options.fill_rule, kernel, &mut frame);
-        fast::keys_to_depths(view.transform(), kernel, &mut frame);
-        c
+        fast::draw_all(view, options.fill_rule, kernel, &mut frame)
     };
     Ok((frame, counts.stats(view)))
 }

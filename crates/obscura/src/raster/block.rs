@@ -1,0 +1,839 @@
+//! Block rasterization: a convex polygon drawn into a depth buffer 8x8 pixels at a
+//! time, eight pixels (one row of a block) per lane vector, generic over [`Lanes`].
+//!
+//! - Input: a polygon set up once ([`BlockSetup`]: its edges in the form below, its
+//!   sample rectangle, its depth-key plane), a region of the image (a tile, a band of
+//!   rows, the whole image) and rows of the buffer described in [`super::lanes`].
+//! - Output: the buffer with the polygon's covered pixels depth-tested; counts of the
+//!   pixels tested and taken.
+//! - Coverage: exactly the shared rule of [`PolygonCoverage::covers`]
+//!   (super::PolygonCoverage::covers). Edge `e` with canonical origin `(ox, oy)`,
+//!   direction `(dx, dy)` and orientation `sign` is stored as `sdx = sign dx`,
+//!   `sdy = sign dy`; per sample the rasterizer computes
+//!   `t = sdy (px - ox) - sdx (py - oy)`, which is `-sign (dx (py - oy) - dy (px - ox))`
+//!   bit for bit (negation is exact and rounding to nearest is symmetric), and the
+//!   sample is inside when `t < bound`, `bound` being `0` for an edge that excludes its
+//!   samples and the smallest positive double for one that includes them.
+//! - Blocks: a polygon whose rectangle is larger than one block is walked block by
+//!   block; each block is first classified by its corner samples. Every step of the
+//!   edge expression is monotonic in `px` along a row and in `py` along a column, so
+//!   the sample of a block that is most inside an edge (resp. most outside) is a
+//!   corner chosen by the signs of `sdy` and `sdx`: if that corner is outside some
+//!   edge no sample of the block is covered (the block is skipped), and if the other
+//!   corner is inside every edge all are (the block is drawn without edge tests). The
+//!   classification is exact, not conservative.
+//! - Depth: the seeds' plane of the depth key, evaluated per pixel:
+//!   `z(i, j) = (z0 + dzdy (j - y0)) + dzdx (i - x0)` from the key `z0` at the first
+//!   sample `(x0 + 0.5, y0 + 0.5)` of the polygon's rectangle, in `f64`. A pixel's key
+//!   depends on the polygon and the pixel only, not on how the image is cut into
+//!   blocks, tiles or bands. It differs from the reference's serial stepping
+//!   `z += dz/dx` by a few units in the last place of the `f64`: the `f32` keys differ
+//!   at most where the reference's keys are within one `f32` unit of each other.
+//! - Complexity: per polygon O(n) setup for n edges; per 8x8 block O(n) to classify
+//!   it, then per row O(n) for a partly covered block and O(1) for a covered one. The
+//!   part of the polygon in the region is classified first, as one block: a covered
+//!   tile is drawn without edge tests, an uncovered one costs nothing more.
+//! - Occlusion culling (optional, [`BlockTarget::with_farthest`]): per block of the
+//!   grid the farthest key it holds; a block whose farthest key is larger than the
+//!   polygon's largest key over the block ([`nearest_key`], a rigorous bound) is
+//!   skipped, which changes nothing in the result.
+//! - Limitations: at most [`MAX_EDGES`] edges ([`BlockSetup::new`] refuses others).
+//!   The caller picks the edge count `E` of a setup: 3 for triangles, 4 for quads, 8
+//!   for the rest (unused edges hold every sample inside).
+//! - Sources: seed 000 "Αλγόριθμος Z-buffer" (the depth test, the plane); Pineda, *A
+//!   parallel algorithm for polygon rasterization* (SIGGRAPH 1988, edge functions);
+//!   Greene, *Hierarchical polygon tiling with coverage masks* (SIGGRAPH 1996, block
+//!   classification by corners).
+
+use super::lanes::{Lanes, key_of, lanes_below, lanes_below16};
+use super::{DepthPlane, EdgeFunction, FillRule, PixelRect};
+
+/// The most edges a [`BlockSetup`] holds (one lane each when blocks are classified).
+pub const MAX_EDGES: usize = 8;
+
+/// Rows of a block, and columns of a narrow one (a wide block has twice as many).
+pub const BLOCK: u32 = 8;
+
+/// Lane offsets `0, 1, ..., 7`.
+const LANE: [f64; 8] = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+
+/// A convex polygon of at most `E` edges set up for block rasterization (see the
+/// module doc). Unused edges (when the polygon has fewer) hold every sample inside.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlockSetup<const E: usize> {
+    /// Canonical edge origins.
+    pub ox: [f64; E],
+    /// Canonical edge origins.
+    pub oy: [f64; E],
+    /// `sign * dx` per edge.
+    pub sdx: [f64; E],
+    /// `sign * dy` per edge.
+    pub sdy: [f64; E],
+    /// `0` or the smallest positive double: a sample is inside the edge when its `t`
+    /// is below this; `+inf` for unused edges.
+    pub bound: [f64; E],
+    /// The pixels whose samples lie in the polygon's box, clipped to the image.
+    pub rect: PixelRect,
+    /// Depth key at the sample of the rectangle's first pixel.
+    pub z0: f64,
+    /// Key change per pixel to the right.
+    pub dzdx: f64,
+    /// Key change per pixel down.
+    pub dzdy: f64,
+}
+
+/// `bound` of an edge that includes (or not) the samples on it.
+#[inline(always)]
+fn bound_of(include_zero: bool) -> f64 {
+    if include_zero { f64::from_bits(1) } else { 0.0 }
+}
+
+impl<const E: usize> BlockSetup<E> {
+    /// The setup of a polygon with these edges (as [`EdgeFunction::new`] makes them),
+    /// sample rectangle and plane; `None` with more than `E` (or [`MAX_EDGES`]) edges
+    /// or an empty rectangle.
+    #[inline(always)]
+    #[must_use]
+    pub fn new(edges: &[EdgeFunction], rect: PixelRect, plane: &DepthPlane) -> Option<Self> {
+        if edges.len() > E || E > MAX_EDGES || rect.is_empty() {
+            return None;
+        }
+        let mut s = BlockSetup {
+            ox: [0.0; E],
+            oy: [0.0; E],
+            sdx: [0.0; E],
+            sdy: [0.0; E],
+            bound: [f64::INFINITY; E],
+            rect,
+            z0: plane.at(f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5),
+            dzdx: plane.dzdx,
+            dzdy: plane.dzdy,
+        };
+        for (k, e) in edges.iter().enumerate() {
+            s.ox[k] = e.ox;
+            s.oy[k] = e.oy;
+            s.sdx[k] = e.sign * e.dx;
+            s.sdy[k] = e.sign * e.dy;
+            s.bound[k] = bound_of(e.include_zero);
+        }
+        Some(s)
+    }
+
+    /// Whether sample `(px, py)` is inside every edge (the per-pixel rule, for tests).
+    #[must_use]
+    pub fn covers_sample(&self, px: f64, py: f64) -> bool {
+        (0..E).all(|k| {
+            let t = self.sdy[k] * (px - self.ox[k]) - self.sdx[k] * (py - self.oy[k]);
+            t < self.bound[k]
+        })
+    }
+
+    /// The depth key of pixel `(i, j)` (the module doc's expression).
+    #[inline(always)]
+    #[must_use]
+    pub fn key(&self, i: u32, j: u32) -> f64 {
+        let zr = self.z0 + self.dzdy * (f64::from(j) - f64::from(self.rect.y0));
+        zr + self.dzdx * (f64::from(i) - f64::from(self.rect.x0))
+    }
+}
+
+/// The edge `p -> q` of a triangle whose signed area has sign `area_sign`, as
+/// [`EdgeFunction::new`] orients it: `(ox, oy, sdx, sdy, bound)`. `p` and `q` are
+/// distinct (the area is not zero).
+#[inline(always)]
+fn triangle_edge(
+    p: (f64, f64),
+    q: (f64, f64),
+    area_sign: f64,
+    inclusive: bool,
+) -> (f64, f64, f64, f64, f64) {
+    let less = p.1 < q.1 || (p.1 == q.1 && p.0 < q.0);
+    let (o, e) = if less { (p, q) } else { (q, p) };
+    let sign = if less { area_sign } else { -area_sign };
+    let (sdx, sdy) = ((e.0 - o.0) * sign, (e.1 - o.1) * sign);
+    // Top edge (horizontal, interior below) or left edge: its samples are inside.
+    let top_left = (sdy == 0.0 && sdx > 0.0) || sdy < 0.0;
+    (o.0, o.1, sdx, sdy, bound_of(inclusive || top_left))
+}
+
+/// The setup of the triangle with vertices `(x, y, zq)` for a `width x height` image:
+/// the edges and rectangle of [`PolygonCoverage::new`](super::PolygonCoverage::new) and
+/// the plane of [`DepthPlane::from_points`] (what
+/// [`TriangleSetup`](super::TriangleSetup) computes, in the block rasterizer's form).
+/// `None` exactly when the triangle covers no sample by the coverage rule's setup: no
+/// sample in its box, or a zero or non-finite area.
+#[inline(always)]
+#[must_use]
+pub fn triangle(
+    p: [(f64, f64, f64); 3],
+    fill: FillRule,
+    width: u32,
+    height: u32,
+) -> Option<BlockSetup<3>> {
+    let [a, b, c] = p;
+    let minx = a.0.min(b.0).min(c.0);
+    let maxx = a.0.max(b.0).max(c.0);
+    let miny = a.1.min(b.1).min(c.1);
+    let maxy = a.1.max(b.1).max(c.1);
+    if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
+        return None;
+    }
+    // sample_rect, with clamp written as max/min (equal for finite values).
+    let (w, h) = (f64::from(width), f64::from(height));
+    let rect = PixelRect {
+        x0: (minx - 0.5).ceil().max(0.0).min(w) as u32,
+        y0: (miny - 0.5).ceil().max(0.0).min(h) as u32,
+        x1: ((maxx - 0.5).floor() + 1.0).max(0.0).min(w) as u32,
+        y1: ((maxy - 0.5).floor() + 1.0).max(0.0).min(h) as u32,
+    };
+    if rect.is_empty() {
+        return None;
+    }
+    let (ax, ay, az) = (b.0 - a.0, b.1 - a.1, b.2 - a.2);
+    let (bx, by, bz) = (c.0 - a.0, c.1 - a.1, c.2 - a.2);
+    let area2 = ax * by - ay * bx;
+    if !(area2 != 0.0 && area2.is_finite()) {
+        return None;
+    }
+    let area_sign = area2.signum();
+    let inclusive = fill == FillRule::Inclusive;
+    let e = [
+        triangle_edge((a.0, a.1), (b.0, b.1), area_sign, inclusive),
+        triangle_edge((b.0, b.1), (c.0, c.1), area_sign, inclusive),
+        triangle_edge((c.0, c.1), (a.0, a.1), area_sign, inclusive),
+    ];
+    // One division: the plane need not be DepthPlane::from_points' to the last bit.
+    let inv = 1.0 / area2;
+    let plane = DepthPlane {
+        x0: a.0,
+        y0: a.1,
+        z0: a.2,
+        dzdx: (az * by - bz * ay) * inv,
+        dzdy: (ax * bz - bx * az) * inv,
+    };
+    Some(BlockSetup {
+        ox: e.map(|e| e.0),
+        oy: e.map(|e| e.1),
+        sdx: e.map(|e| e.2),
+        sdy: e.map(|e| e.3),
+        bound: e.map(|e| e.4),
+        rect,
+        z0: plane.at(f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5),
+        dzdx: plane.dzdx,
+        dzdy: plane.dzdy,
+    })
+}
+
+/// Pixels tested (covered) and taken by a drawing.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    /// Covered pixels, each depth-tested.
+    pub tested: u64,
+    /// Pixels that passed the test and were written.
+    pub written: u64,
+}
+
+/// A rectangle of an image held row after row: depth keys and encoded ids (see
+/// [`super::lanes`]) of the columns `x0..x0 + stride` and rows `y0..`.
+#[derive(Debug)]
+pub struct BlockTarget<'a> {
+    keys: &'a mut [f32],
+    ids: &'a mut [u32],
+    stride: usize,
+    x0: u32,
+    y0: u32,
+    y1: u32,
+    /// Per block of the grid (see [`BlockTarget::with_farthest`]), a key no larger
+    /// than any its pixels hold; empty when blocks are not culled.
+    farthest: &'a mut [f32],
+}
+
+impl<'a> BlockTarget<'a> {
+    /// The target of columns `x0..x0 + stride` and rows `y0..` of an image; the slices
+    /// hold whole rows (`None` when they do not, or differ in length).
+    #[must_use]
+    pub fn new(
+        keys: &'a mut [f32],
+        ids: &'a mut [u32],
+        stride: usize,
+        x0: u32,
+        y0: u32,
+    ) -> Option<Self> {
+        if stride == 0 || keys.len() != ids.len() || !keys.len().is_multiple_of(stride) {
+            return None;
+        }
+        let rows = u32::try_from(keys.len() / stride).ok()?;
+        Some(BlockTarget {
+            keys,
+            ids,
+            stride,
+            x0,
+            y0,
+            y1: y0.checked_add(rows)?,
+            farthest: &mut [],
+        })
+    }
+
+    /// The target with occlusion culling: `farthest` holds, per block of
+    /// `2 BLOCK x BLOCK` pixels of the grid from the target's first pixel (row after
+    /// row of `stride / (2 BLOCK)` blocks), a key no larger than any key its pixels
+    /// hold. [`draw`] with [`Align::Grid`] skips the blocks whose key is larger than
+    /// every key the polygon has there: the polygon wins none of their pixels, not even
+    /// a tie, so the result is the same. The keys only grow while drawing, so a
+    /// value computed before stays valid (only less effective); [`draw`] recomputes
+    /// the value of each whole block it writes to.
+    #[must_use]
+    pub fn with_farthest(mut self, farthest: &'a mut [f32]) -> Self {
+        self.farthest = farthest;
+        self
+    }
+
+    /// Whether the polygon `s` wins no pixel of `c`, a part of the grid block at
+    /// `(bx, by)`, by the blocks' keys.
+    #[inline(always)]
+    fn hides<const E: usize>(&self, s: &BlockSetup<E>, bx: u32, by: u32, c: PixelRect) -> bool {
+        if self.farthest.is_empty() || bx < self.x0 || by < self.y0 {
+            return false;
+        }
+        let per_row = self.stride / (2 * BLOCK as usize);
+        let at =
+            ((by - self.y0) / BLOCK) as usize * per_row + ((bx - self.x0) / (2 * BLOCK)) as usize;
+        let Some(&far) = self.farthest.get(at) else {
+            return false;
+        };
+        // `!(far > 0)`: an empty pixel (key 0) or a NaN hides nothing.
+        if !(far > 0.0) {
+            return false;
+        }
+        far > nearest_key(s, c)
+    }
+
+    /// Recomputes the farthest key of the grid block at `(bx, by)` if the target holds
+    /// all of its pixels.
+    #[inline(always)]
+    fn refresh(&mut self, bx: u32, by: u32) {
+        let bw = 2 * BLOCK as usize;
+        if self.farthest.is_empty()
+            || bx < self.x0
+            || by < self.y0
+            || (bx - self.x0) as usize + bw > self.stride
+            || by + BLOCK > self.y1
+        {
+            return;
+        }
+        let per_row = self.stride / bw;
+        let at = ((by - self.y0) / BLOCK) as usize * per_row + (bx - self.x0) as usize / bw;
+        let first = self.at(bx, by);
+        let mut m = [f32::INFINITY; 16];
+        for r in 0..BLOCK as usize {
+            let row = &self.keys[first + r * self.stride..][..bw];
+            for (m, &v) in m.iter_mut().zip(row) {
+                *m = if v < *m { v } else { *m };
+            }
+        }
+        if let Some(far) = self.farthest.get_mut(at) {
+            *far = m.into_iter().fold(f32::INFINITY, f32::min);
+        }
+    }
+
+    /// The pixels it holds.
+    #[must_use]
+    pub fn rect(&self) -> PixelRect {
+        PixelRect {
+            x0: self.x0,
+            y0: self.y0,
+            x1: self.x0.saturating_add(self.stride as u32),
+            y1: self.y1,
+        }
+    }
+
+    /// The index of pixel `(x, y)` (inside [`BlockTarget::rect`]) in the slices.
+    #[inline(always)]
+    fn at(&self, x: u32, y: u32) -> usize {
+        (y - self.y0) as usize * self.stride + (x - self.x0) as usize
+    }
+
+    /// The keys and ids of the pixels `x..x + n` of row `y` (inside the rectangle).
+    #[must_use]
+    pub fn row(&self, x: u32, y: u32, n: usize) -> (&[f32], &[u32]) {
+        let at = self.at(x, y);
+        (&self.keys[at..at + n], &self.ids[at..at + n])
+    }
+
+    /// The keys and ids of the pixels `x..x + n` of row `y` (inside the rectangle).
+    pub fn row_mut(&mut self, x: u32, y: u32, n: usize) -> (&mut [f32], &mut [u32]) {
+        let at = self.at(x, y);
+        (&mut self.keys[at..at + n], &mut self.ids[at..at + n])
+    }
+}
+
+/// An upper bound of the keys the rasterizer computes for polygon `s` in the pixels
+/// of `c`, as stored (`f32`): the key expression is affine, so its largest value is at
+/// a corner; a margin of `1e-12` of the terms' magnitudes covers the roundings of any
+/// order of evaluation (a few units of `2^-53` each), and [`key_of`] is monotonic.
+/// NaN for a non-finite plane.
+#[inline(always)]
+#[must_use]
+pub fn nearest_key<const E: usize>(s: &BlockSetup<E>, c: PixelRect) -> f32 {
+    let i = if s.dzdx > 0.0 { c.x1 - 1 } else { c.x0 };
+    let j = if s.dzdy > 0.0 { c.y1 - 1 } else { c.y0 };
+    let top = s.key(i, j);
+    let reach = s.z0.abs()
+        + s.dzdy.abs() * (f64::from(j) - f64::from(s.rect.y0)).abs()
+        + s.dzdx.abs() * (f64::from(i) - f64::from(s.rect.x0)).abs();
+    key_of(top + reach * 1e-12)
+}
+
+/// Where blocks start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Align {
+    /// At the polygon's rectangle (fewest blocks: a polygon at most 8 pixels wide is
+    /// one column of 8-pixel blocks, one at most 16 wide one column of 16-pixel ones).
+    Polygon,
+    /// On the image's grid of 16x8 blocks (no block crosses a tile's border, and a
+    /// row of a block is one cache line of keys when the rows are aligned).
+    Grid,
+}
+
+/// The polygon's edges in lanes (one edge per lane), for classifying blocks.
+struct EdgeLanes<F> {
+    ox: F,
+    oy: F,
+    sdx: F,
+    sdy: F,
+    bound: F,
+    /// Lanes where `sdy > 0`: `t` grows to the right, the leftmost sample is most inside.
+    rising_x: u8,
+    /// Lanes where `sdx > 0`: `t` shrinks downwards, the lowest sample is most inside.
+    falling_y: u8,
+    used: u8,
+}
+
+impl<F: Copy> EdgeLanes<F> {
+    #[inline(always)]
+    fn new<L: Lanes<F = F>, const E: usize>(l: L, s: &BlockSetup<E>) -> Self {
+        let mut rising_x = 0u8;
+        let mut falling_y = 0u8;
+        for k in 0..E {
+            rising_x |= u8::from(s.sdy[k] > 0.0) << k;
+            falling_y |= u8::from(s.sdx[k] > 0.0) << k;
+        }
+        // Built from values, not stored and reloaded: a vector load of scalars just
+        // stored stalls until the stores reach the cache.
+        let pad = |a: &[f64; E], v: f64| {
+            let mut o = [v; 8];
+            let mut k = 0;
+            while k < E {
+                o[k] = a[k];
+                k += 1;
+            }
+            o
+        };
+        EdgeLanes {
+            ox: l.set(pad(&s.ox, 0.0)),
+            oy: l.set(pad(&s.oy, 0.0)),
+            sdx: l.set(pad(&s.sdx, 0.0)),
+            sdy: l.set(pad(&s.sdy, 0.0)),
+            bound: l.set(pad(&s.bound, f64::INFINITY)),
+            rising_x,
+            falling_y,
+            used: lanes_below(E),
+        }
+    }
+}
+
+/// How samples lie with respect to a polygon.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Class {
+    Outside,
+    Inside,
+    Partial,
+}
+
+/// Classifies the samples of the pixels `r` by their corners (see the module doc).
+#[inline(always)]
+fn classify<L: Lanes>(l: L, e: &EdgeLanes<L::F>, r: PixelRect) -> Class {
+    let (left, right) = (
+        l.splat(f64::from(r.x0) + 0.5),
+        l.splat(f64::from(r.x1) - 0.5),
+    );
+    let (top, bottom) = (
+        l.splat(f64::from(r.y0) + 0.5),
+        l.splat(f64::from(r.y1) - 0.5),
+    );
+    let (px, py) = (
+        l.select(e.rising_x, left, right),
+        l.select(e.falling_y, bottom, top),
+    );
+    let best = l.sub(l.mul(e.sdy, l.sub(px, e.ox)), l.mul(e.sdx, l.sub(py, e.oy)));
+    if l.less(e.used, best, e.bound) != e.used {
+        return Class::Outside;
+    }
+    let (px, py) = (
+        l.select(e.rising_x, right, left),
+        l.select(e.falling_y, top, bottom),
+    );
+    let worst = l.sub(l.mul(e.sdy, l.sub(px, e.ox)), l.mul(e.sdx, l.sub(py, e.oy)));
+    if l.less(e.used, worst, e.bound) == e.used {
+        Class::Inside
+    } else {
+        Class::Partial
+    }
+}
+
+/// The mask of lanes `a..b` of a block row (`a <= b <= 16`).
+#[inline(always)]
+fn lane_range(a: u32, b: u32) -> u16 {
+    lanes_below16(b as usize) & !lanes_below16(a as usize)
+}
+
+/// Draws the polygon `s` into the pixels of `region` (image coordinates) that the
+/// target holds, with encoded id `face`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn draw<L: Lanes, const E: usize>(
+    l: L,
+    s: &BlockSetup<E>,
+    region: PixelRect,
+    align: Align,
+    target: &mut BlockTarget<'_>,
+    face: u32,
+    counts: &mut Counts,
+) {
+    let t = target.rect();
+    let r = PixelRect {
+        x0: s.rect.x0.max(region.x0).max(t.x0),
+        y0: s.rect.y0.max(region.y0).max(t.y0),
+        x1: s.rect.x1.min(region.x1).min(t.x1),
+        y1: s.rect.y1.min(region.y1).min(t.y1),
+    };
+    if r.is_empty() {
+        return;
+    }
+    if align == Align::Polygon && r.x1 - r.x0 <= BLOCK {
+        draw_blocks::<L, E, false>(l, s, r, r.x0, r.y0, target, face, counts);
+    } else {
+        let (bx0, by0) = match align {
+            Align::Polygon => (r.x0, r.y0),
+            Align::Grid => (r.x0 & !(2 * BLOCK - 1), r.y0 & !(BLOCK - 1)),
+        };
+        draw_blocks::<L, E, true>(l, s, r, bx0, by0, target, face, counts);
+    }
+}
+
+/// [`draw`] with blocks of 16 (`WIDE`) or 8 columns and 8 rows from `(bx0, by0)`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn draw_blocks<L: Lanes, const E: usize, const WIDE: bool>(
+    l: L,
+    s: &BlockSetup<E>,
+    r: PixelRect,
+    bx0: u32,
+    by0: u32,
+    target: &mut BlockTarget<'_>,
+    face: u32,
+    counts: &mut Counts,
+) {
+    let bw = if WIDE { 2 * BLOCK } else { BLOCK };
+    if r.x1 - bx0 <= bw && r.y1 - by0 <= BLOCK {
+        let lanes = lane_range(r.x0 - bx0, r.x1 - bx0);
+        draw_block::<L, E, WIDE>(
+            l,
+            s,
+            bx0,
+            by0,
+            r.y0..r.y1,
+            lanes,
+            false,
+            target,
+            face,
+            counts,
+        );
+        return;
+    }
+    let edges = EdgeLanes::new(l, s);
+    // The whole part first: a tile inside a big polygon needs no edge test at all.
+    let all_inside = match classify(l, &edges, r) {
+        Class::Outside => return,
+        Class::Inside => true,
+        Class::Partial => false,
+    };
+    let mut by = by0;
+    while by < r.y1 {
+        let (cy0, cy1) = (by.max(r.y0), (by + BLOCK).min(r.y1));
+        let mut bx = bx0;
+        while bx < r.x1 {
+            let (cx0, cx1) = (bx.max(r.x0), (bx + bw).min(r.x1));
+            let c = PixelRect {
+                x0: cx0,
+                y0: cy0,
+                x1: cx1,
+                y1: cy1,
+            };
+            if WIDE && target.hides(s, bx, by, c) {
+                bx += bw;
+                continue;
+            }
+            let full = all_inside
+                || match classify(l, &edges, c) {
+                    Class::Outside => {
+                        bx += bw;
+                        continue;
+                    }
+                    Class::Inside => true,
+                    Class::Partial => false,
+                };
+            let lanes = lane_range(cx0 - bx, cx1 - bx);
+            let written = counts.written;
+            draw_block::<L, E, WIDE>(l, s, bx, by, cy0..cy1, lanes, full, target, face, counts);
+            if WIDE && counts.written != written {
+                target.refresh(bx, by);
+            }
+            bx += bw;
+        }
+        by += BLOCK;
+    }
+}
+
+/// Draws rows `rows` of the block at `(bx, by)`, in the lanes `lanes` (columns
+/// `bx + l`; 16 of them when `WIDE`, else 8); `full` when every such sample is known
+/// to be covered.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn draw_block<L: Lanes, const E: usize, const WIDE: bool>(
+    l: L,
+    s: &BlockSetup<E>,
+    bx: u32,
+    by: u32,
+    rows: std::ops::Range<u32>,
+    lanes: u16,
+    full: bool,
+    target: &mut BlockTarget<'_>,
+    face: u32,
+    counts: &mut Counts,
+) {
+    let lane = l.load(&LANE);
+    // Depth: the column part per lane, the row part per row.
+    let dx = f64::from(bx) - f64::from(s.rect.x0);
+    let dzdx = l.splat(s.dzdx);
+    let zc_lo = l.mul(dzdx, l.add_scalar(lane, dx));
+    let zc_hi = if WIDE {
+        l.mul(dzdx, l.add_scalar(lane, dx + 8.0))
+    } else {
+        zc_lo
+    };
+    let zr = l.to_array(l.add_scalar(
+        l.mul(
+            l.splat(s.dzdy),
+            l.add_scalar(lane, f64::from(by) - f64::from(s.rect.y0)),
+        ),
+        s.z0,
+    ));
+    let stride = target.stride;
+    let mut at = target.at(bx, rows.start);
+    let first = (rows.start - by) as usize;
+    let last = ((rows.end - by) as usize).min(8);
+    let (keys, ids) = (&mut *target.keys, &mut *target.ids);
+    // The depth tests below access the pixels of `lanes` in rows `first..last` without
+    // checking them: check the farthest one once. (The callers clip the block to the
+    // target, so this never fails.)
+    let reach = 16 - lanes.leading_zeros() as usize;
+    if lanes == 0
+        || first >= last
+        || at + (last - first - 1) * stride + reach > keys.len().min(ids.len())
+    {
+        return;
+    }
+    if full {
+        counts.tested += u64::from(lanes.count_ones()) * (last - first) as u64;
+        for &zj in &zr[first..last] {
+            // SAFETY: the pixels of `lanes` in this row are inside the slices (checked
+            // above for the farthest row).
+            let taken = unsafe {
+                if WIDE {
+                    l.depth_test16(
+                        keys,
+                        ids,
+                        at,
+                        lanes,
+                        l.add_scalar(zc_lo, zj),
+                        l.add_scalar(zc_hi, zj),
+                        face,
+                    )
+                } else {
+                    u16::from(l.depth_test8(
+                        keys,
+                        ids,
+                        at,
+                        lanes as u8,
+                        l.add_scalar(zc_lo, zj),
+                        face,
+                    ))
+                }
+            };
+            counts.written += u64::from(taken.count_ones());
+            at += stride;
+        }
+        return;
+    }
+    // Coverage: per edge the column part `sdy (px - ox)` per lane and the row part
+    // `sdx (py - oy)` per row. (Loops, not closures: a closure is not compiled for the
+    // caller's instruction set, so the lane operations in it would not be inlined.)
+    // Sample positions are small integers plus a half: exact.
+    let px = l.add_scalar(lane, f64::from(bx) + 0.5);
+    let px_hi = l.add_scalar(lane, f64::from(bx) + 8.5);
+    let py = l.add_scalar(lane, f64::from(by) + 0.5);
+    let mut col_lo = [px; E];
+    let mut col_hi = [px; E];
+    let mut row = [[0.0; 8]; E];
+    let mut bound = [px; E];
+    for k in 0..E {
+        let sdy = l.splat(s.sdy[k]);
+        col_lo[k] = l.mul(sdy, l.sub_scalar(px, s.ox[k]));
+        if WIDE {
+            col_hi[k] = l.mul(sdy, l.sub_scalar(px_hi, s.ox[k]));
+        }
+        row[k] = l.to_array(l.mul(l.splat(s.sdx[k]), l.sub_scalar(py, s.oy[k])));
+        bound[k] = l.splat(s.bound[k]);
+    }
+    let (lanes_lo, lanes_hi) = (lanes as u8, (lanes >> 8) as u8);
+    for j in first..last {
+        let mut lo = lanes_lo;
+        let mut hi = lanes_hi;
+        // Independent compares, their masks combined after (a chain of masked compares
+        // would wait for each other).
+        for k in 0..E {
+            lo &= l.less(0xff, l.sub_scalar(col_lo[k], row[k][j]), bound[k]);
+            if WIDE {
+                hi &= l.less(0xff, l.sub_scalar(col_hi[k], row[k][j]), bound[k]);
+            }
+        }
+        let cover = u16::from(lo) | if WIDE { u16::from(hi) << 8 } else { 0 };
+        if cover != 0 {
+            counts.tested += u64::from(cover.count_ones());
+            let zj = zr[j];
+            // SAFETY: `cover` is within `lanes`, whose pixels in this row are inside the
+            // slices (checked above for the farthest row).
+            let taken = unsafe {
+                if WIDE {
+                    l.depth_test16(
+                        keys,
+                        ids,
+                        at,
+                        cover,
+                        l.add_scalar(zc_lo, zj),
+                        l.add_scalar(zc_hi, zj),
+                        face,
+                    )
+                } else {
+                    u16::from(l.depth_test8(keys, ids, at, lo, l.add_scalar(zc_lo, zj), face))
+                }
+            };
+            counts.written += u64::from(taken.count_ones());
+        }
+        at += stride;
+    }
+}
+
+/// Writes the depths and face ids of the target's pixels in `region` to the rows of a
+/// frame (`depth` and `ids`, `width` pixels per row, starting at image row `frame_y0`):
+/// see [`Lanes::resolve`].
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn resolve<L: Lanes>(
+    l: L,
+    target: &BlockTarget<'_>,
+    region: PixelRect,
+    depth_out: &mut [f32],
+    ids_out: &mut [u32],
+    width: usize,
+    frame_y0: u32,
+    depth: super::lanes::DepthOfKey,
+) {
+    let t = target.rect();
+    let (x0, x1) = (region.x0.max(t.x0), region.x1.min(t.x1).min(width as u32));
+    if x0 >= x1 {
+        return;
+    }
+    let n = (x1 - x0) as usize;
+    for y in region.y0.max(t.y0).max(frame_y0)..region.y1.min(t.y1) {
+        let (keys, ids) = target.row(x0, y, n);
+        let at = (y - frame_y0) as usize * width + x0 as usize;
+        let Some((d, o)) = depth_out
+            .get_mut(at..at + n)
+            .zip(ids_out.get_mut(at..at + n))
+        else {
+            return;
+        };
+        l.resolve(keys, ids, d, o, depth);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::demo::SplitMix64;
+
+    #[test]
+    fn nearest_key_bounds_every_key_of_the_rectangle() {
+        let mut rng = SplitMix64(17);
+        let mut tight = 0;
+        for round in 0..3000 {
+            let x0 = (rng.next_u64() % 200) as u32;
+            let y0 = (rng.next_u64() % 200) as u32;
+            let rect = PixelRect {
+                x0,
+                y0,
+                x1: x0 + 1 + (rng.next_u64() % 40) as u32,
+                y1: y0 + 1 + (rng.next_u64() % 40) as u32,
+            };
+            let scale = [1.0, 1e-3, 1e3][round % 3];
+            let s = BlockSetup::<0> {
+                ox: [],
+                oy: [],
+                sdx: [],
+                sdy: [],
+                bound: [],
+                rect,
+                z0: rng.range(-0.1, 1.0),
+                dzdx: rng.range(-1e-2, 1e-2) * scale,
+                dzdy: rng.range(-1e-2, 1e-2) / scale,
+            };
+            let near = nearest_key(&s, rect);
+            let mut top = 0.0f32;
+            for j in rect.y0..rect.y1 {
+                for i in rect.x0..rect.x1 {
+                    // Both orders of the sum: the row part first (as `key`), the column
+                    // part first.
+                    let a = key_of(s.key(i, j));
+                    let b = key_of(
+                        s.z0 + (s.dzdx * (f64::from(i) - f64::from(rect.x0))
+                            + s.dzdy * (f64::from(j) - f64::from(rect.y0))),
+                    );
+                    assert!(a <= near && b <= near, "{s:?}: {a} {b} {near}");
+                    top = top.max(a);
+                }
+            }
+            tight += usize::from(top == near);
+        }
+        // The margin is far below an f32 unit: the bound is usually the largest key.
+        assert!(tight > 2500, "{tight}");
+        let nan = BlockSetup::<0> {
+            ox: [],
+            oy: [],
+            sdx: [],
+            sdy: [],
+            bound: [],
+            rect: PixelRect {
+                x0: 0,
+                y0: 0,
+                x1: 2,
+                y1: 2,
+            },
+            z0: f64::NAN,
+            dzdx: 0.0,
+            dzdy: 0.0,
+        };
+        assert!(nearest_key(&nan, nan.rect).is_nan());
+    }
+}
