@@ -29,11 +29,15 @@
 //!   [`crate::accel::triangles`], so the BVH finds exactly the hits brute force finds.
 //!   [`Bvh::closest_hit_recursive`] is the seeds' `IntersectionTest` verbatim
 //!   (unordered recursion), kept for comparison.
-//! - Limitations: no ray packets; boxes are single precision (rounded outwards), so
+//! - Packets ([`packet`]): coherent rays (4x4 pixels) traced together, with per-ray
+//!   masks, so that each gets exactly its single-ray hit; the renderer uses them.
+//! - Limitations: boxes are single precision (rounded outwards), so
 //!   scenes with coordinates beyond about 10^30 are not supported; at most 2^29
 //!   triangles.
 
 mod build;
+mod lanes;
+pub mod packet;
 pub mod traverse;
 
 use std::time::Instant;
