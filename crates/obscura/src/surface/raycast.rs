@@ -382,6 +382,7 @@ pub fn render_bvh(
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
         let mut stack = PacketStack::default();
+        let mut packet = RayPacket::default();
         let ctx = PacketContext {
             ignored: &setup.ignored,
             faces: setup.faces,
@@ -389,7 +390,7 @@ pub fn render_bvh(
             tie: setup.rays.tie_rule(),
         };
         setup.cast_band_packets(band, counters, |rays, counters| {
-            let packet = RayPacket::new(rays, bvh.scale());
+            packet.prepare(rays, bvh.scale());
             let mut c = TraceCounters::default();
             let hits = bvh.closest_hits(&packet, &ctx, setup.rays.far, &mut stack, &mut c);
             counters.bound_tests += c.nodes;

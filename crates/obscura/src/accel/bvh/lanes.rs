@@ -18,9 +18,9 @@
 
 use glam::DVec3;
 
-use super::BvhNode;
-use super::packet::{CHUNK, Mask, PACKET, RayPacket};
+use super::packet::{CHUNK, Frustum, Mask, PACKET, RayPacket};
 use super::traverse::{max, min};
+use super::{BvhNode, WIDTH};
 use crate::accel::triangles::AxisOrder;
 
 /// What the packet traversal needs from lane arithmetic.
@@ -37,6 +37,18 @@ pub(super) trait Lanes: Copy {
         t_hi: &[f32; PACKET],
         mask: Mask,
     ) -> (Mask, f32);
+
+    /// The interval test of the whole packet against the eight children of `n`: a bit
+    /// set for each child some ray may enter within `[t_lo, t_far]`, clear for those
+    /// no ray can enter (empty slots included). `t_far` bounds the far limits of the
+    /// rays considered.
+    fn children(self, f: &Frustum, n: &BvhNode, t_lo: f32, t_far: f32) -> u32;
+
+    /// The largest far limit of the rays of `mask`.
+    fn far_limit(self, t_hi: &[f32; PACKET], mask: Mask) -> f32;
+
+    /// The rays of `mask` whose far limit is not before `t`.
+    fn not_before(self, t_hi: &[f32; PACKET], t: f32, mask: Mask) -> Mask;
 
     /// The watertight test of one triangle against the rays of chunk `c` (lanes
     /// `8c..8c + 8`), lane by lane the operations of
@@ -59,6 +71,59 @@ pub(super) trait Lanes: Copy {
 pub(super) struct Portable;
 
 impl Lanes for Portable {
+    #[inline(always)]
+    fn children(self, f: &Frustum, n: &BvhNode, t_lo: f32, t_far: f32) -> u32 {
+        let mut near = [t_lo; WIDTH];
+        let mut far = [t_far; WIDTH];
+        for axis in 0..3 {
+            let (entry, exit) = if f.positive[axis] {
+                (&n.min[axis], &n.max[axis])
+            } else {
+                (&n.max[axis], &n.min[axis])
+            };
+            let (oe, ox) = (f.entry_origin[axis], f.exit_origin[axis]);
+            let (i0, i1) = (f.inv_min[axis], f.inv_max[axis]);
+            for k in 0..WIDTH {
+                let de = entry[k] - oe;
+                let dx = exit[k] - ox;
+                near[k] = max(near[k], min(de * i0, de * i1));
+                far[k] = min(far[k], max(dx * i0, dx * i1));
+            }
+        }
+        let mut out = 0;
+        for k in 0..WIDTH {
+            out |= u32::from(near[k] <= far[k]) << k;
+        }
+        out
+    }
+
+    #[inline(always)]
+    fn far_limit(self, t_hi: &[f32; PACKET], mask: Mask) -> f32 {
+        let mut v = [f32::NEG_INFINITY; PACKET];
+        for r in 0..PACKET {
+            if mask >> r & 1 != 0 {
+                v[r] = t_hi[r];
+            }
+        }
+        let mut width = PACKET / 2;
+        while width > 0 {
+            for r in 0..width {
+                v[r] = max(v[r], v[r + width]);
+            }
+            width /= 2;
+        }
+        v[0]
+    }
+
+    #[inline(always)]
+    fn not_before(self, t_hi: &[f32; PACKET], t: f32, mask: Mask) -> Mask {
+        let mut out = 0;
+        for (r, &hi) in t_hi.iter().enumerate() {
+            out |= Mask::from(hi >= t) << r;
+        }
+        out & mask
+    }
+
     #[inline(always)]
     fn enter(
         self,
@@ -170,11 +235,11 @@ mod x86 {
 
     use glam::DVec3;
 
-    use super::{BvhNode, CHUNK, Lanes, Mask, PACKET, RayPacket};
+    use super::{BvhNode, CHUNK, Frustum, Lanes, Mask, PACKET, RayPacket};
     use crate::accel::triangles::AxisOrder;
 
-    /// AVX-512 lanes. A value exists only on a processor with AVX-512 F (and the AVX2
-    /// it implies).
+    /// AVX-512 lanes. A value exists only on a processor with AVX-512 F and VL (and the
+    /// AVX2 they imply).
     #[derive(Clone, Copy, Debug)]
     pub(in crate::accel::bvh) struct Avx512 {
         _proof: (),
@@ -183,12 +248,38 @@ mod x86 {
     impl Avx512 {
         /// The lanes, if this processor runs them.
         pub(in crate::accel::bvh) fn new() -> Option<Self> {
-            (is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx2"))
-                .then_some(Avx512 { _proof: () })
+            (is_x86_feature_detected!("avx512f")
+                && is_x86_feature_detected!("avx512vl")
+                && is_x86_feature_detected!("avx2"))
+            .then_some(Avx512 { _proof: () })
         }
     }
 
     impl Lanes for Avx512 {
+        #[inline(always)]
+        fn children(self, f: &Frustum, n: &BvhNode, t_lo: f32, t_far: f32) -> u32 {
+            // SAFETY: an `Avx512` exists only when the processor has the features.
+            unsafe { children(f, n, t_lo, t_far) }
+        }
+
+        #[inline(always)]
+        fn far_limit(self, t_hi: &[f32; PACKET], mask: Mask) -> f32 {
+            // SAFETY: as above; `t_hi` is sixteen `f32`, one unaligned load.
+            unsafe { _mm512_mask_reduce_max_ps(mask as u16, _mm512_loadu_ps(t_hi.as_ptr())) }
+        }
+
+        #[inline(always)]
+        fn not_before(self, t_hi: &[f32; PACKET], t: f32, mask: Mask) -> Mask {
+            // SAFETY: as above.
+            unsafe {
+                Mask::from(_mm512_mask_cmp_ps_mask::<_CMP_GE_OQ>(
+                    mask as u16,
+                    _mm512_loadu_ps(t_hi.as_ptr()),
+                    _mm512_set1_ps(t),
+                ))
+            }
+        }
+
         #[inline(always)]
         fn enter(
             self,
@@ -218,6 +309,44 @@ mod x86 {
     }
 
     const _: () = assert!(PACKET == 16 && CHUNK == 8);
+
+    #[target_feature(enable = "avx512f,avx512vl,avx2")]
+    #[inline]
+    fn children(f: &Frustum, n: &BvhNode, t_lo: f32, t_far: f32) -> u32 {
+        // SAFETY (loads): every array read is `[f32; 8]`, one 256-bit unaligned load.
+        unsafe {
+            let mut near = _mm256_set1_ps(t_lo);
+            let mut far = _mm256_set1_ps(t_far);
+            for axis in 0..3 {
+                let (entry, exit) = if f.positive[axis] {
+                    (&n.min[axis], &n.max[axis])
+                } else {
+                    (&n.max[axis], &n.min[axis])
+                };
+                let de = _mm256_sub_ps(
+                    _mm256_loadu_ps(entry.as_ptr()),
+                    _mm256_set1_ps(f.entry_origin[axis]),
+                );
+                let dx = _mm256_sub_ps(
+                    _mm256_loadu_ps(exit.as_ptr()),
+                    _mm256_set1_ps(f.exit_origin[axis]),
+                );
+                let (i0, i1) = (
+                    _mm256_set1_ps(f.inv_min[axis]),
+                    _mm256_set1_ps(f.inv_max[axis]),
+                );
+                near = _mm256_max_ps(
+                    near,
+                    _mm256_min_ps(_mm256_mul_ps(de, i0), _mm256_mul_ps(de, i1)),
+                );
+                far = _mm256_min_ps(
+                    far,
+                    _mm256_max_ps(_mm256_mul_ps(dx, i0), _mm256_mul_ps(dx, i1)),
+                );
+            }
+            u32::from(_mm256_cmp_ps_mask::<_CMP_LE_OQ>(near, far))
+        }
+    }
 
     #[target_feature(enable = "avx512f,avx2")]
     #[inline]
@@ -346,7 +475,13 @@ mod tests {
     /// Sixteen rays along `axis` (negative when `down`): from integer points with
     /// exact axis directions (so triangles with integer vertices put some of them
     /// exactly on edges and vertices), or from random points in a narrow cone.
-    fn rays(rng: &mut SplitMix64, axis: usize, down: bool, exact: bool) -> Vec<(DVec3, DVec3)> {
+    fn rays(
+        rng: &mut SplitMix64,
+        axis: usize,
+        down: bool,
+        exact: bool,
+        same_signs: bool,
+    ) -> Vec<(DVec3, DVec3)> {
         (0..PACKET)
             .map(|_| {
                 let mut d = DVec3::ZERO;
@@ -360,11 +495,15 @@ mod tests {
                     (o, d)
                 } else {
                     let o = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0) - d * 6.0;
-                    let spread = DVec3::new(
-                        rng.range(-0.2, 0.2),
-                        rng.range(-0.2, 0.2),
-                        rng.range(-0.2, 0.2),
-                    );
+                    // Directions whose components keep their signs across the packet
+                    // (so it has a frustum), or not.
+                    let (lo, hi) = if same_signs {
+                        (0.05, 0.25)
+                    } else {
+                        (-0.2, 0.2)
+                    };
+                    let spread =
+                        DVec3::new(rng.range(lo, hi), rng.range(lo, hi), rng.range(lo, hi));
                     (o, d + spread)
                 }
             })
@@ -393,13 +532,32 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         let fast = Avx512::new();
         let (mut hits, mut edges) = (0, 0);
+        let (mut frustums, mut kept, mut culled) = (0, 0, 0);
         for case in 0..300 {
             let exact = case % 2 == 0;
-            let list = rays(&mut rng, axis, down, exact);
+            let list = rays(&mut rng, axis, down, exact, case % 4 == 1);
             let p = RayPacket::new(&list, 10.0);
             assert!(p.is_coherent());
+            frustums += usize::from(p.frustum.is_some());
             // Boxes: every child, random masks and far limits.
-            let n = random_node(&mut rng);
+            let mut n = random_node(&mut rng);
+            // Boxes that rays only graze: a corner on one of the rays.
+            for k in 0..WIDTH - 1 {
+                if rng.next_f64() < 0.5 {
+                    let (o, d) = list[(rng.next_u64() % PACKET as u64) as usize];
+                    let corner = o + d * rng.range(2.0, 9.0);
+                    for axis in 0..3 {
+                        let size = rng.range(0.0, 1.0);
+                        let (lo, hi) = if rng.next_f64() < 0.5 {
+                            (corner[axis] - size, corner[axis])
+                        } else {
+                            (corner[axis], corner[axis] + size)
+                        };
+                        n.min[axis][k] = f32_down(lo);
+                        n.max[axis][k] = f32_up(hi);
+                    }
+                }
+            }
             let mask = (rng.next_u64() as Mask) & 0xffff | 1;
             let t_hi: [f32; PACKET] = std::array::from_fn(|_| {
                 if rng.next_f64() < 0.3 {
@@ -408,8 +566,34 @@ mod tests {
                     rng.range(0.0, 12.0) as f32
                 }
             });
+            // The interval test keeps every child some ray of the mask enters.
+            let far = Portable.far_limit(&t_hi, mask);
+            let candidates = p.frustum.map(|f| Portable.children(&f, &n, 0.0, far));
+            let t = rng.range(0.0, 12.0) as f32;
+            let later = Portable.not_before(&t_hi, t, mask);
+            assert_eq!(
+                later,
+                (0..PACKET).fold(0, |m, r| m | Mask::from(t_hi[r] >= t) << r) & mask
+            );
+            #[cfg(target_arch = "x86_64")]
+            if let Some(fast) = fast {
+                assert_eq!(fast.far_limit(&t_hi, mask), far);
+                assert_eq!(fast.not_before(&t_hi, t, mask), later);
+                assert_eq!(
+                    p.frustum.map(|f| fast.children(&f, &n, 0.0, far)),
+                    candidates
+                );
+            }
             for k in 0..WIDTH {
                 let (entered, first) = Portable.enter(&p, &n, k, 0.0, &t_hi, mask);
+                if let Some(c) = candidates {
+                    if entered != 0 {
+                        assert!(c >> k & 1 != 0, "case {case}: child {k} entered but culled");
+                        kept += 1;
+                    } else if c >> k & 1 == 0 {
+                        culled += 1;
+                    }
+                }
                 let mut expected = 0;
                 let mut smallest = f32::INFINITY;
                 for (r, &(o, d)) in list.iter().enumerate() {
@@ -478,8 +662,12 @@ mod tests {
                 }
             }
         }
-        // Both kinds of lanes occurred.
+        // Both kinds of lanes occurred, and the interval test both kept and culled.
         assert!(hits > 100 && edges > 20, "{hits} {edges}");
+        assert!(
+            frustums > 100 && kept > 100 && culled > 100,
+            "{frustums} {kept} {culled}"
+        );
     }
 
     #[test]

@@ -75,7 +75,7 @@ impl Default for TraversalStack {
 }
 
 /// The margin of the box test relative to the coordinates (see the module doc).
-const MARGIN: f64 = 1.0 / 131_072.0;
+pub(super) const MARGIN: f64 = 1.0 / 131_072.0;
 
 /// A ray prepared for the single-precision slab test.
 ///
