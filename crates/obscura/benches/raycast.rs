@@ -1,7 +1,8 @@
 //! Ray casting benchmarks: the four accelerations on the default demo scene, the BVH and
 //! grid builds, and BVH tracing alone (built once, as for many views).
 //!
-//! `cargo bench -p obscura --bench raycast`; criterion reports the time per frame (or
+//! `cargo bench -p obscura --bench raycast`; the Sponza group needs the file (see
+//! [`sponza`]). Criterion reports the time per frame (or
 //! build) and the throughput in rays (or triangles) per second. The figures of the
 //! brief (1920x1080, one thread) come from the CLI's `--stats-json`: `trace_ms`,
 //! `mrays_per_s`, `build_ms`.
@@ -82,5 +83,54 @@ fn bvh_trace(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, variants, builds, bvh_trace);
+/// Sponza's atrium at 1920x1080 (the figures), when the file is there:
+/// `SPONZA=path`, else `../shared/data/sponza.obj` beside the repository.
+fn sponza(c: &mut Criterion) {
+    let path = std::env::var("SPONZA").unwrap_or_else(|_| {
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/data/sponza.obj"
+        )
+        .to_string()
+    });
+    let Ok(scene) = obscura::Scene::load(&path) else {
+        eprintln!("no Sponza at {path}: skipped");
+        return;
+    };
+    let vp = Viewport::new(1920, 1080).unwrap();
+    let cam = obscura::Camera::perspective(
+        glam::DVec3::new(0.0, -10.0, 2.0),
+        glam::DVec3::new(0.0, 10.0, 4.0),
+        glam::DVec3::Z,
+        60.0,
+        0.05,
+        100.0,
+    );
+    let tris = SceneTriangles::new(&scene);
+    let mut g = c.benchmark_group("raycast/sponza");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(tris.len() as u64));
+    g.bench_function("bvh build", |b| {
+        b.iter(|| Bvh::build(black_box(&tris), &BvhOptions::default()))
+    });
+    let bvh = Bvh::build(&tris, &BvhOptions::default());
+    let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+    g.throughput(Throughput::Elements(vp.pixel_count() as u64));
+    // One thread, as the figures.
+    let trace = || raycast::render_bvh(&view, &tris, &bvh, &RenderOptions::default()).unwrap();
+    #[cfg(feature = "parallel")]
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    g.bench_function("bvh trace 1920x1080, 1 thread", |b| {
+        #[cfg(feature = "parallel")]
+        b.iter(|| one.install(trace));
+        #[cfg(not(feature = "parallel"))]
+        b.iter(trace);
+    });
+    g.finish();
+}
+
+criterion_group!(benches, variants, builds, bvh_trace, sponza);
 criterion_main!(benches);

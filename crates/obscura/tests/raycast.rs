@@ -6,10 +6,13 @@
 //! agree with each other bit for bit.
 
 use glam::{DMat3, DMat4, DVec3};
+use obscura::accel::bvh::packet::{PACKET, PACKET_SIDE, PacketContext, PacketStack, RayPacket};
 use obscura::accel::bvh::traverse::{Kernel, TraceCounters, TraversalStack};
 use obscura::accel::bvh::{Bvh, BvhOptions, Slot, WIDTH};
 use obscura::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
-use obscura::accel::triangles::{HitContext, PrimaryRays, SceneTriangles, WatertightRay};
+use obscura::accel::triangles::{
+    ClosestHit, HitContext, PrimaryRays, SceneTriangles, WatertightRay,
+};
 use obscura::cull::backface::BackfaceMode;
 use obscura::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb};
 use obscura::scene::{Camera, MeshBuilder, ObjectDesc, demo};
@@ -553,6 +556,192 @@ fn bvh_kernels_agree() {
         }
         assert!(hits > 1000, "{hits}");
     }
+}
+
+/// Rays grouped into packets, traced with `kernel`, against the same rays traced one by
+/// one (portable kernel): every lane must give the single ray's hit, bit for bit;
+/// lanes without a ray give no hit. Returns how many rays hit something.
+fn check_packets(
+    bvh: &Bvh,
+    ctx: &PacketContext<'_>,
+    far: f64,
+    groups: &[Vec<(DVec3, DVec3)>],
+) -> usize {
+    let mut single = TraversalStack::default();
+    let mut stack = PacketStack::default();
+    let mut hits = 0;
+    for (g, rays) in groups.iter().enumerate() {
+        let expected: Vec<ClosestHit> = rays
+            .iter()
+            .map(|&(o, d)| match WatertightRay::new(o, d) {
+                None => ClosestHit::new(far),
+                Some(ray) => bvh.closest_hit_with(
+                    Kernel::Portable,
+                    &ctx.with_ray(ray),
+                    far,
+                    &mut single,
+                    &mut TraceCounters::default(),
+                ),
+            })
+            .collect();
+        hits += expected.iter().filter(|h| h.is_hit()).count();
+        let packet = RayPacket::new(rays, bvh.scale());
+        for kernel in [Kernel::Auto, Kernel::Portable, Kernel::Avx2, Kernel::Avx512] {
+            let out = bvh.closest_hits_with(
+                kernel,
+                &packet,
+                ctx,
+                far,
+                &mut stack,
+                &mut TraceCounters::default(),
+            );
+            for (r, hit) in out.iter().enumerate() {
+                let want = expected.get(r).copied().unwrap_or(ClosestHit::new(far));
+                assert_eq!(
+                    (hit.t.to_bits(), hit.face),
+                    (want.t.to_bits(), want.face),
+                    "group {g} lane {r} {kernel:?}: {hit:?} vs {want:?}"
+                );
+            }
+        }
+    }
+    hits
+}
+
+/// The rays of a camera grouped into blocks of 4x4 pixels (fewer at the edges), as the
+/// renderer groups them.
+fn pixel_blocks(rays: &PrimaryRays, vp: Viewport) -> Vec<Vec<(DVec3, DVec3)>> {
+    let mut groups = Vec::new();
+    for j0 in (0..vp.height).step_by(PACKET_SIDE) {
+        for i0 in (0..vp.width).step_by(PACKET_SIDE) {
+            let mut g = Vec::new();
+            for j in j0..(j0 + PACKET_SIDE as u32).min(vp.height) {
+                for i in i0..(i0 + PACKET_SIDE as u32).min(vp.width) {
+                    g.push(rays.ray(f64::from(i) + 0.5, f64::from(j) + 0.5));
+                }
+            }
+            groups.push(g);
+        }
+    }
+    groups
+}
+
+#[test]
+fn packets_equal_single_rays() {
+    // Coherent packets, perspective: a soup, and the default scene with culled back
+    // faces.
+    for (scene, backface) in [
+        (random_triangles(1500, 31), BackfaceMode::All),
+        (demo::default_scene(), BackfaceMode::Closed),
+    ] {
+        let tris = SceneTriangles::new(&scene);
+        let bvh = Bvh::build(&tris, &BvhOptions::default());
+        let vp = Viewport::new(61, 43).unwrap();
+        let cam = generic_camera(DVec3::new(4.3, 3.1, 8.7), DVec3::new(0.2, -0.1, 0.3));
+        let rays = PrimaryRays::new(&cam, vp);
+        let ignored = tris.ignored_polygons(&scene, &cam, backface);
+        let ctx = PacketContext {
+            ignored: &ignored,
+            faces: tris.polygon_faces(),
+            t_min: rays.near,
+            tie: rays.tie_rule(),
+        };
+        let hits = check_packets(&bvh, &ctx, rays.far, &pixel_blocks(&rays, vp));
+        assert!(hits > 800, "{hits}");
+    }
+}
+
+#[test]
+fn packets_on_shared_edges_and_vertices_equal_single_rays() {
+    // A grid of 18 x 18 quads (fanned into triangles), wider than the view, seen from
+    // above by an orthographic camera whose pixel centres fall exactly on the grid's
+    // vertices, on the midpoints of its edges and on the quads' diagonals: every ray
+    // is decided by the tie rule, each by exactly one triangle (no pixel left empty).
+    let mut s = Scene::new();
+    s.add(
+        ObjectDesc::new("grid", demo::grid_mesh(9.0, 9.0, 18, 18))
+            .with_transform(DMat4::from_translation(DVec3::new(0.125, 0.0, 0.125))),
+    )
+    .unwrap();
+    let cam = Camera::orthographic(DVec3::Y * 5.0, DVec3::ZERO, DVec3::Z, 8.0, 0.5, 20.0);
+    let vp = Viewport::new(32, 32).unwrap();
+    let tris = SceneTriangles::new(&s);
+    let bvh = Bvh::build(&tris, &BvhOptions::default());
+    let rays = PrimaryRays::new(&cam, vp);
+    let ignored = tris.ignored_polygons(&s, &cam, BackfaceMode::Off);
+    let ctx = PacketContext {
+        ignored: &ignored,
+        faces: tris.polygon_faces(),
+        t_min: rays.near,
+        tie: rays.tie_rule(),
+    };
+    let groups = pixel_blocks(&rays, vp);
+    // The pixel centres really are on the grid's lines (from -4.375 by 0.5) or halfway.
+    for (o, _) in groups.iter().flatten() {
+        assert!(((o.x + 4.375) * 4.0).fract() == 0.0 && ((o.z + 4.375) * 4.0).fract() == 0.0);
+    }
+    let hits = check_packets(&bvh, &ctx, rays.far, &groups);
+    assert_eq!(hits, 32 * 32);
+}
+
+#[test]
+fn incoherent_packets_and_missing_rays_equal_single_rays() {
+    // Random rays from random origins in random directions, sixteen to a packet: most
+    // packets mix axis orders (traced ray by ray), some share one with different
+    // origins; some lanes hold no ray (a zero or NaN direction) and short packets
+    // leave lanes empty.
+    let scene = random_triangles(800, 8);
+    let tris = SceneTriangles::new(&scene);
+    let bvh = Bvh::build(&tris, &BvhOptions::default());
+    let cam = generic_camera(DVec3::new(0.0, 0.0, 9.0), DVec3::ZERO);
+    let rays = PrimaryRays::new(&cam, Viewport::new(8, 8).unwrap());
+    let ignored = vec![false; tris.polygon_count()];
+    let ctx = PacketContext {
+        ignored: &ignored,
+        faces: tris.polygon_faces(),
+        t_min: 0.0,
+        tie: rays.tie_rule(),
+    };
+    let mut rng = demo::SplitMix64(21);
+    let mut v = |scale: f64| {
+        DVec3::new(
+            rng.range(-scale, scale),
+            rng.range(-scale, scale),
+            rng.range(-scale, scale),
+        )
+    };
+    let mut groups: Vec<Vec<(DVec3, DVec3)>> = Vec::new();
+    for g in 0..120 {
+        let n = if g % 7 == 0 { 1 + g % PACKET } else { PACKET };
+        let mut rays: Vec<(DVec3, DVec3)> = (0..n)
+            .map(|_| {
+                let o = v(6.0);
+                // Towards the soup, and in a narrow cone for every third packet so
+                // that packets sharing an axis order are common.
+                let d = if g % 3 == 0 {
+                    DVec3::new(0.0, 0.0, -1.0) + v(0.3)
+                } else {
+                    v(2.0) - o
+                };
+                (o, d)
+            })
+            .collect();
+        if g % 5 == 0 {
+            rays[0].1 = DVec3::ZERO;
+            let last = rays.len() - 1;
+            rays[last].1.x = f64::NAN;
+        }
+        groups.push(rays);
+    }
+    let hits = check_packets(&bvh, &ctx, 100.0, &groups);
+    assert!(hits > 300, "{hits}");
+    assert!(
+        groups
+            .iter()
+            .filter(|g| RayPacket::new(g, bvh.scale()).is_coherent())
+            .count()
+            > 30
+    );
 }
 
 #[test]

@@ -371,6 +371,20 @@ pub trait WithAxisOrder {
     fn run<O: AxisOrder>(self) -> Self::Output;
 }
 
+/// Runs `f` with the axis order of index `order` (see [`WatertightRay::order_index`];
+/// 5 and above mean the last order).
+#[inline]
+pub fn dispatch_order<F: WithAxisOrder>(order: u8, f: F) -> F::Output {
+    match order {
+        0 => f.run::<OrderYzx>(),
+        1 => f.run::<OrderZyx>(),
+        2 => f.run::<OrderZxy>(),
+        3 => f.run::<OrderXzy>(),
+        4 => f.run::<OrderXyz>(),
+        _ => f.run::<OrderYxz>(),
+    }
+}
+
 /// A ray prepared for the watertight test.
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
@@ -424,17 +438,26 @@ impl WatertightRay {
         })
     }
 
+    /// Which of the six axis orders this ray has (0..6, the index `dispatch` uses):
+    /// rays with equal orders can be tested together by code compiled for one order.
+    #[inline]
+    #[must_use]
+    pub fn order_index(&self) -> u8 {
+        self.order
+    }
+
+    /// The shear of the ray's frame: `(d_x / d_z, d_y / d_z, 1 / d_z)` in its axis
+    /// order (what [`WatertightRay::intersect`] computes with).
+    #[inline]
+    #[must_use]
+    pub fn shear(&self) -> DVec3 {
+        self.shear
+    }
+
     /// Runs `f` with this ray's axis order as a type.
     #[inline]
     pub fn dispatch<F: WithAxisOrder>(&self, f: F) -> F::Output {
-        match self.order {
-            0 => f.run::<OrderYzx>(),
-            1 => f.run::<OrderZyx>(),
-            2 => f.run::<OrderZxy>(),
-            3 => f.run::<OrderXzy>(),
-            4 => f.run::<OrderXyz>(),
-            _ => f.run::<OrderYxz>(),
-        }
+        dispatch_order(self.order, f)
     }
 
     /// The parameter `t` at which the ray hits the triangle, if it does with

@@ -30,7 +30,7 @@
 //! | --- | --- | --- |
 //! | [`Acceleration::BruteForce`] | every triangle (the seeds' `RayCasting`) | triangle tests |
 //! | [`Acceleration::Bounds`] | each object's bounding volume, then the triangles of the objects hit, nearest volume first, stopping at a volume behind the nearest hit | bound tests and hits, tests saved |
-//! | [`Acceleration::Bvh`] | [`crate::accel::bvh`]: binned-SAH hierarchy, ordered traversal | build, nodes, depth, Mrays/s |
+//! | [`Acceleration::Bvh`] | [`crate::accel::bvh`]: binned-SAH hierarchy, ordered traversal of packets of 4x4 rays ([`crate::accel::bvh::packet`]) | build, nodes, depth, node visits per ray and per packet, Mrays/s |
 //! | [`Acceleration::Grid`] | [`crate::accel::grid`]: uniform grid, 3D-DDA, hits accepted only in the current cell | cells, refs, cells per ray |
 //!
 //! All four run the same exact test on the same triangles, so they return the same
@@ -41,9 +41,10 @@
 //! - Complexity: brute force O(p T) for p pixels and T triangles; bounds O(p (K + T_hit))
 //!   for K objects; BVH about O(p log T); grid O(p (cells per ray + refs per cell)).
 //! - Order and parallelism: pixels are traced in 8x8 tiles (neighbouring rays visit the
-//!   same nodes and triangles, which stay in cache); bands of 8 rows are the unit of
-//!   work, run on rayon's current pool with the `parallel` feature (the CLI's
-//!   `--threads`; 1 is single-threaded), sequentially without it.
+//!   same nodes and triangles, which stay in cache; the BVH traces each tile as four
+//!   packets of 4x4 rays, each ray still getting its own exact hit); bands of 8 rows
+//!   are the unit of work, run on rayon's current pool with the `parallel` feature
+//!   (the CLI's `--threads`; 1 is single-threaded), sequentially without it.
 //! - Limitations: one sample per pixel (no anti-aliasing); the depth is the hit's `t`,
 //!   not the rasterizers' interpolated key, so depths agree with the z-buffer's to
 //!   `f32` rounding, not bit for bit.
@@ -53,7 +54,8 @@ use std::time::Instant;
 
 use glam::DVec3;
 
-use crate::accel::bvh::traverse::{TraceCounters, TraversalStack};
+use crate::accel::bvh::packet::{PACKET, PACKET_SIDE, PacketContext, PacketStack, RayPacket};
+use crate::accel::bvh::traverse::TraceCounters;
 use crate::accel::bvh::{Bvh, BvhOptions};
 use crate::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
 use crate::accel::triangles::{
@@ -96,6 +98,8 @@ pub struct RayCounters {
     pub hits_outside_cell: u64,
     /// Grid tests answered by the mailbox.
     pub mailbox_hits: u64,
+    /// BVH nodes visited by packets of rays (each counts once for the packet).
+    pub packet_nodes: u64,
 }
 
 impl AddAssign for RayCounters {
@@ -108,6 +112,7 @@ impl AddAssign for RayCounters {
         self.cells += o.cells;
         self.hits_outside_cell += o.hits_outside_cell;
         self.mailbox_hits += o.mailbox_hits;
+        self.packet_nodes += o.packet_nodes;
     }
 }
 
@@ -376,16 +381,29 @@ pub fn render_bvh(
     let setup = Setup::new(view, triangles);
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
-        let mut stack = TraversalStack::default();
-        setup.cast_band(band, counters, |ctx, counters| {
+        let mut stack = PacketStack::default();
+        let mut packet = RayPacket::default();
+        let ctx = PacketContext {
+            ignored: &setup.ignored,
+            faces: setup.faces,
+            t_min: setup.rays.near,
+            tie: setup.rays.tie_rule(),
+        };
+        setup.cast_band_packets(band, counters, |rays, counters| {
+            packet.prepare(rays, bvh.scale());
             let mut c = TraceCounters::default();
-            let hit = bvh.closest_hit(ctx, setup.rays.far, &mut stack, &mut c);
+            let hits = bvh.closest_hits(&packet, &ctx, setup.rays.far, &mut stack, &mut c);
             counters.bound_tests += c.nodes;
+            counters.packet_nodes += c.packet_nodes;
             counters.triangle_tests += c.triangles;
-            hit
-        })
+            hits
+        });
     })?;
     let mut stats = setup.stats(&counters, ms_since(start));
+    stats.set(
+        "packet_node_visits_per_ray",
+        per(counters.packet_nodes, counters.rays),
+    );
     let b = bvh.stats();
     stats.set("build_ms", b.build_ms);
     stats.set("binary_nodes", b.binary_nodes as f64);
@@ -555,6 +573,49 @@ impl<'a> Setup<'a> {
                         counters.hits += 1;
                         ids[r * w + i] = hit.face;
                         depth[r * w + i] = hit.t as f32;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Fills one band of rows packet by packet (blocks of [`PACKET_SIDE`] x
+    /// [`PACKET_SIDE`] pixels, in tiles of [`TILE`] columns): `trace` gets the rays of
+    /// a block (row by row; fewer at the image's edges) and returns their hits.
+    fn cast_band_packets<F>(
+        &self,
+        band: (usize, &mut [u32], &mut [f32]),
+        counters: &mut RayCounters,
+        mut trace: F,
+    ) where
+        F: FnMut(&[(DVec3, DVec3)], &mut RayCounters) -> [ClosestHit; PACKET],
+    {
+        let (j0, ids, depth) = band;
+        let w = self.width;
+        let rows = ids.len() / w.max(1);
+        let mut rays: Vec<(DVec3, DVec3)> = Vec::with_capacity(PACKET);
+        let mut pixels: Vec<usize> = Vec::with_capacity(PACKET);
+        for x0 in (0..w).step_by(TILE) {
+            let x1 = (x0 + TILE).min(w);
+            for r0 in (0..rows).step_by(PACKET_SIDE) {
+                for i0 in (x0..x1).step_by(PACKET_SIDE) {
+                    rays.clear();
+                    pixels.clear();
+                    for r in r0..(r0 + PACKET_SIDE).min(rows) {
+                        let sy = self.rays.window_y((j0 + r) as f64 + 0.5);
+                        for i in i0..(i0 + PACKET_SIDE).min(x1) {
+                            rays.push(self.rays.ray_at(self.window_x[i], sy));
+                            pixels.push(r * w + i);
+                        }
+                    }
+                    counters.rays += rays.len() as u64;
+                    let hits = trace(&rays, counters);
+                    for (hit, &p) in hits.iter().zip(&pixels) {
+                        if hit.is_hit() {
+                            counters.hits += 1;
+                            ids[p] = hit.face;
+                            depth[p] = hit.t as f32;
+                        }
                     }
                 }
             }

@@ -11,7 +11,7 @@
 //!
 //! - Input: [`SceneTriangles`]. Output: a [`Bvh`], built once and reusable for any
 //!   number of views (it holds its own copy of the triangles in leaf order).
-//! - Build ([`build`]): binned surface area heuristic with [`BvhOptions::bins`] bins
+//! - Build (module `build`): binned surface area heuristic with [`BvhOptions::bins`] bins
 //!   (16 by default) per axis, O(T log T) for T triangles; deep or unsplittable
 //!   ranges fall back to median splits, so the depth stays below [`MAX_DEPTH`].
 //! - Collapse: each wide node takes the binary node's two children and repeatedly
@@ -29,11 +29,15 @@
 //!   [`crate::accel::triangles`], so the BVH finds exactly the hits brute force finds.
 //!   [`Bvh::closest_hit_recursive`] is the seeds' `IntersectionTest` verbatim
 //!   (unordered recursion), kept for comparison.
-//! - Limitations: no ray packets; boxes are single precision (rounded outwards), so
+//! - Packets ([`packet`]): coherent rays (4x4 pixels) traced together, with per-ray
+//!   masks, so that each gets exactly its single-ray hit; the renderer uses them.
+//! - Limitations: boxes are single precision (rounded outwards), so
 //!   scenes with coordinates beyond about 10^30 are not supported; at most 2^29
 //!   triangles.
 
 mod build;
+mod lanes;
+pub mod packet;
 pub mod traverse;
 
 use std::time::Instant;
@@ -383,28 +387,36 @@ fn collapse(binary: &[BinaryNode]) -> Vec<BvhNode> {
     }
     // (binary interior node, wide node that represents it)
     let mut stack = vec![(0u32, 0u32)];
-    let mut kids: Vec<u32> = Vec::with_capacity(WIDTH);
+    // Each wide node stands for at least one binary interior node.
+    wide.reserve(binary.len() / 2);
+    // The children of the wide node being formed: binary index, half area (interior
+    // nodes; -1 for leaves, never opened).
+    let mut kids: Vec<(u32, f64)> = Vec::with_capacity(WIDTH);
+    let kid = |c: u32| {
+        let n = &binary[c as usize];
+        (c, if n.is_leaf() { -1.0 } else { n.half_area() })
+    };
     while let Some((b, w)) = stack.pop() {
         let node = &binary[b as usize];
         kids.clear();
-        kids.extend([node.first, node.first + 1]);
+        kids.extend([kid(node.first), kid(node.first + 1)]);
         while kids.len() < WIDTH {
-            let open = kids
+            // The last of equal largest areas, as before the areas were cached.
+            let Some((k, &(c, area))) = kids
                 .iter()
                 .enumerate()
-                .filter(|(_, c)| !binary[**c as usize].is_leaf())
-                .max_by(|a, b| {
-                    binary[*a.1 as usize]
-                        .half_area()
-                        .total_cmp(&binary[*b.1 as usize].half_area())
-                })
-                .map(|(k, _)| k);
-            let Some(k) = open else { break };
-            let c = kids.swap_remove(k);
+                .max_by(|a, b| a.1.1.total_cmp(&b.1.1))
+            else {
+                break;
+            };
+            if area < 0.0 {
+                break;
+            }
+            kids.swap_remove(k);
             let first = binary[c as usize].first;
-            kids.extend([first, first + 1]);
+            kids.extend([kid(first), kid(first + 1)]);
         }
-        for (k, &c) in kids.iter().enumerate() {
+        for (k, &(c, _)) in kids.iter().enumerate() {
             let child = &binary[c as usize];
             let slot = if child.is_leaf() {
                 Slot::Leaf {

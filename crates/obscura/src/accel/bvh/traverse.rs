@@ -41,12 +41,16 @@ pub struct TraceCounters {
     pub nodes: u64,
     /// Exact triangle tests run.
     pub triangles: u64,
+    /// Nodes visited by packets ([`super::packet`]; `nodes` counts each ray of a
+    /// packet that visits a node).
+    pub packet_nodes: u64,
 }
 
 impl std::ops::AddAssign for TraceCounters {
     fn add_assign(&mut self, o: Self) {
         self.nodes += o.nodes;
         self.triangles += o.triangles;
+        self.packet_nodes += o.packet_nodes;
     }
 }
 
@@ -71,7 +75,7 @@ impl Default for TraversalStack {
 }
 
 /// The margin of the box test relative to the coordinates (see the module doc).
-const MARGIN: f64 = 1.0 / 131_072.0;
+pub(super) const MARGIN: f64 = 1.0 / 131_072.0;
 
 /// A ray prepared for the single-precision slab test.
 ///
@@ -89,13 +93,33 @@ pub struct BoxRay {
     swap: [bool; 3],
 }
 
+/// The ray origin shifted by the margin `δ` for boxes of coordinates up to `scale`:
+/// `(o + δ, o - δ)` in `f32`. A box's lower planes are measured from the first, its
+/// upper planes from the second, which grows every box by `δ` on each side.
+#[inline]
+pub(super) fn shifted_origins(origin: DVec3, scale: f64) -> ([f32; 3], [f32; 3]) {
+    let delta = (origin.abs().max_element() + scale) * MARGIN;
+    let lower = (origin + delta).to_array().map(|x| x as f32);
+    let upper = (origin - delta).to_array().map(|x| x as f32);
+    (lower, upper)
+}
+
+/// `1 / d` per axis in `f32`; 1 / ±0 gives ±inf, clamped to ±10^30 so it keeps the
+/// sign that picks the planes and no `0 · ∞` NaN can appear.
+#[inline]
+pub(super) fn inverse_direction(direction: DVec3) -> [f32; 3] {
+    direction
+        .to_array()
+        .map(|d| (1.0 / d).clamp(-1e30, 1e30) as f32)
+}
+
 #[inline(always)]
-fn min(a: f32, b: f32) -> f32 {
+pub(super) fn min(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 
 #[inline(always)]
-fn max(a: f32, b: f32) -> f32 {
+pub(super) fn max(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
@@ -103,12 +127,8 @@ impl BoxRay {
     /// Prepares a ray for boxes whose coordinates are at most `scale` in absolute value.
     #[must_use]
     pub fn new(origin: DVec3, direction: DVec3, scale: f64) -> Self {
-        let delta = (origin.abs().max_element() + scale) * MARGIN;
-        let lower = (origin + delta).to_array().map(|x| x as f32);
-        let upper = (origin - delta).to_array().map(|x| x as f32);
-        let d = direction.to_array();
-        // 1 / ±0 gives ±inf: clamped, it keeps the sign that picks the planes.
-        let inv = d.map(|d| (1.0 / d).clamp(-1e30, 1e30) as f32);
+        let (lower, upper) = shifted_origins(origin, scale);
+        let inv = inverse_direction(direction);
         let swap = inv.map(|i| i < 0.0);
         BoxRay {
             near_origin: std::array::from_fn(|k| if swap[k] { upper[k] } else { lower[k] }),
@@ -163,6 +183,11 @@ pub enum Kernel {
     Auto,
     /// The baseline build (no AVX2), on every CPU.
     Portable,
+    /// The portable code compiled for AVX2 (where the CPU has it, else portable).
+    Avx2,
+    /// AVX-512 lanes for packets ([`super::packet`]; where the CPU has them, else the
+    /// next best); single rays use the AVX2 build.
+    Avx512,
 }
 
 impl Bvh {
@@ -198,7 +223,7 @@ impl Bvh {
             type Output = ClosestHit;
             fn run<O: AxisOrder>(self) -> ClosestHit {
                 #[cfg(target_arch = "x86_64")]
-                if self.kernel == Kernel::Auto && std::arch::is_x86_feature_detected!("avx2") {
+                if self.kernel != Kernel::Portable && std::arch::is_x86_feature_detected!("avx2") {
                     // SAFETY: the CPU has AVX2 (checked just above), the only
                     // requirement of this function; its body is safe code.
                     return unsafe {
