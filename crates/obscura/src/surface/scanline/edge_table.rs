@@ -15,57 +15,135 @@
 //! when the polygon's first edge enters. Memory therefore follows the active faces,
 //! not the scene.
 
-use crate::raster::{EdgeFunction, sample_rect};
-use crate::view::PreparedView;
+use crate::raster::EdgeFunction;
+#[cfg(doc)]
+use crate::raster::sample_rect;
+use crate::view::{PreparedView, ViewPolygon};
 
-/// One entry of the active edge list.
+/// One entry of the active edge list: the seed's `(x_min, 1/m, y_max)`, the bound
+/// that lets `x` alone settle the crossing pixel, and which of its face's edges it is
+/// (32 bytes; its face is the [`super::faces::ScanFace`] holding it). Its edge function
+/// is its face's, read only when the crossing is too near a pixel centre.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ScanEdge {
-    /// The canonical edge function (the shared coverage rule).
-    pub edge: EdgeFunction,
-    /// Where it crosses the current row's sample line.
+    /// Where it crosses the current row's sample line (stepped by `1/m` per row).
     pub x: f64,
     /// `dx/dy`, the seed's `1/m`.
     pub inverse_slope: f64,
-    /// Bottom end (the top end is the edge function's origin).
-    pub y_max: f64,
-    /// The slot of its face among the active faces.
-    pub slot: u32,
-    /// Its index among its face's edge functions.
-    pub index: u32,
+    /// `0.5 - t` for the [`tolerance`] `t` of the edge: how far `x` may be from the
+    /// exact crossing, plus how near a pixel centre the shared edge test may round the
+    /// wrong way, over every row of the edge. Minus infinity when no bound is known.
+    pub band: f64,
     /// The last row it is active on.
     pub last_row: u32,
-    /// The face's sample box columns: crossings are clamped to `x_lo..=x_hi`.
-    pub x_lo: u32,
-    /// One past the last column of the face's sample box.
-    pub x_hi: u32,
-    /// The crossing pixel of the current row: for a left edge the first pixel inside
-    /// it, for a right edge the first pixel past it (`x_hi` when none).
-    pub pixel: u32,
-    /// Whether the face lies to the right of it (its crossing opens the face's span);
-    /// otherwise the crossing closes it.
-    pub left: bool,
+    /// Its index among its face's edge functions; the top bit tells a left edge.
+    pub index_left: u32,
 }
 
+const LEFT: u32 = 1 << 31;
+
 impl ScanEdge {
-    /// Settles the crossing pixel of row `py` (sample line), starting from the
-    /// incremental `x` and correcting it with the edge function. Returns how many
-    /// pixels the incremental guess was off.
+    /// A placeholder.
+    pub const NONE: ScanEdge = ScanEdge {
+        x: 0.0,
+        inverse_slope: 0.0,
+        band: f64::NEG_INFINITY,
+        last_row: 0,
+        index_left: 0,
+    };
+
+    /// Packs an edge's index and side.
     #[inline]
-    pub fn cross(&mut self, py: f64) -> u64 {
-        let e = &self.edge;
-        let row = e.row_term(py);
-        let (lo, hi) = (i64::from(self.x_lo), i64::from(self.x_hi));
-        // The first pixel whose centre is at or right of x.
-        let guess = ceil_within(self.x - 0.5, lo, hi);
-        let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
-        let found = if self.left {
-            first_true(lo, hi, guess, inside)
-        } else {
-            first_true(lo, hi, guess, |i| !inside(i))
-        };
-        self.pixel = found as u32;
-        found.abs_diff(guess)
+    pub fn index_left(index: u32, left: bool) -> u32 {
+        debug_assert!(index < LEFT);
+        index | if left { LEFT } else { 0 }
+    }
+
+    /// Whether the face lies to the right of it (its crossing opens the face's span).
+    #[inline(always)]
+    pub fn left(&self) -> bool {
+        self.index_left & LEFT != 0
+    }
+
+    /// Its index among its face's edge functions.
+    #[inline(always)]
+    pub fn index(&self) -> u32 {
+        self.index_left & !LEFT
+    }
+
+    /// The crossing pixel (not clamped) when `x` settles it: the first pixel whose
+    /// centre lies right of `x`, if every centre is farther from `x` than the
+    /// tolerance (`band = 0.5 - tolerance`). The shared edge test is then known to
+    /// switch exactly there: it is monotonic along the row and agrees with the exact
+    /// sign at the two centres around the crossing. `None` sends the edge to
+    /// [`exact_pixel`].
+    ///
+    /// A finite tolerance bounds `|x|` far below `2^52` (see [`tolerance`]), where the
+    /// truncation is exact; it is the floor for `x >= 0.5`, and anything left of that
+    /// (or NaN) fails the test.
+    #[inline(always)]
+    pub fn settled_pixel(x: f64, band: f64) -> Option<i64> {
+        let v = x - 0.5;
+        let t = v as i64;
+        let frac = v - t as f64;
+        ((frac - 0.5).abs() < band).then_some(t + 1)
+    }
+}
+
+/// `0.5 -` [`tolerance`]: the [`ScanEdge::band`] of an edge.
+#[inline]
+pub(crate) fn band(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
+    let t = tolerance(e, s, rows);
+    if t.is_finite() { 0.5 - t } else { f64::NEG_INFINITY }
+}
+
+/// The crossing pixel of a left (`left`) or right edge with shared edge function `e`
+/// on the row with sample line `py`, within columns `lo..=hi`, found from the
+/// incremental guess `x` by the edge test itself. Returns it and how many pixels the
+/// guess was off.
+#[inline(never)]
+pub(crate) fn exact_pixel(
+    e: &EdgeFunction,
+    left: bool,
+    x: f64,
+    py: f64,
+    lo: u32,
+    hi: u32,
+) -> (u32, u64) {
+    let row = e.row_term(py);
+    let (lo, hi) = (i64::from(lo), i64::from(hi));
+    // The first pixel whose centre is at or right of x.
+    let guess = ceil_within(x - 0.5, lo, hi);
+    let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
+    let found = if left {
+        first_true(lo, hi, guess, inside)
+    } else {
+        first_true(lo, hi, guess, |i| !inside(i))
+    };
+    (found as u32, found.abs_diff(guess))
+}
+
+/// A bound, in pixels, on the error of an incrementally stepped crossing `x` of edge
+/// `e` with inverse slope `s` over `rows` rows, plus the distance from the exact
+/// crossing within which the shared edge test may round to the wrong side. With `u`
+/// the unit roundoff: the first `x = ox + (py - oy) s` is within `u (|ox| + 4 |py - oy|
+/// |s|)`; each of the `rows` steps adds at most `u (|x| + |s|)` (the rounding of the
+/// sum and of `s`); the edge test `dx (py - oy) - dy (px - ox)` is off by at most
+/// `2u (|dx| |py - oy| + |dy| |px - ox|)`, which is `2u (|s| |py - oy| + |px - ox|)`
+/// in pixels. The sum is taken with `|py - oy| <= |dy| + 2`, `|x|, |px - ox| <= the
+/// edge's extent + 2`, doubled twice for safety; infinite if not finite or not small.
+pub(crate) fn tolerance(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
+    let u = f64::EPSILON; // twice the unit roundoff
+    let x_extent = e.ox.abs().max((e.ox + e.dx).abs()) + e.dx.abs() + 2.0;
+    let y_extent = e.dy.abs() + 2.0;
+    let s = s.abs();
+    let bound = 4.0
+        * u
+        * (x_extent + 8.0 * y_extent * s + (f64::from(rows) + 4.0) * (s + x_extent) + 4.0);
+    if bound.is_finite() && bound < 0.25 {
+        bound
+    } else {
+        f64::INFINITY
     }
 }
 
@@ -90,7 +168,7 @@ const ALL_INTEGERS: f64 = 4_503_599_627_370_496.0;
 /// `v.ceil()` by truncation (no C library call on targets without a rounding
 /// instruction); NaN stays NaN.
 #[inline(always)]
-fn round_up(v: f64) -> f64 {
+pub(crate) fn round_up(v: f64) -> f64 {
     if !(v.abs() < ALL_INTEGERS) {
         return v;
     }
@@ -100,7 +178,7 @@ fn round_up(v: f64) -> f64 {
 
 /// `v.floor()` by truncation; NaN stays NaN.
 #[inline(always)]
-fn round_down(v: f64) -> f64 {
+pub(crate) fn round_down(v: f64) -> f64 {
     if !(v.abs() < ALL_INTEGERS) {
         return v;
     }
@@ -125,13 +203,16 @@ fn first_true(lo: i64, hi: i64, guess: i64, pred: impl Fn(i64) -> bool) -> i64 {
     i
 }
 
-/// An edge of the table: edge `pair` (from vertex `pair` to the next) of a polygon.
+/// An edge of the table: edge `pair` (from vertex `pair` to the next) of a polygon,
+/// and the last row it is active on.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TableEdge {
     /// The polygon's index in the view.
     pub polygon: u32,
     /// The edge's index in the polygon.
     pub pair: u32,
+    /// Its last row.
+    pub last_row: u32,
 }
 
 /// Edges bucketed by their first active row (flat arrays).
@@ -150,6 +231,37 @@ pub(crate) fn edge_rows(ya: f64, yb: f64, y0: u32, y1: u32) -> Option<(u32, u32)
     (first <= last).then_some((first as u32, last as u32))
 }
 
+/// [`sample_rect`]'s pixel range of `[lo, hi]` on an axis of `n` pixels, with its
+/// rounding done by truncation (no C library call where the target has no rounding
+/// instruction): `ceil(lo - 0.5)` to `floor(hi - 0.5) + 1`, clamped to `0..=n`.
+#[inline(always)]
+pub(crate) fn sample_range(lo: f64, hi: f64, n: u32) -> (u32, u32) {
+    let n = f64::from(n);
+    let a = round_up(lo - 0.5).max(0.0).min(n);
+    let b = (round_down(hi - 0.5) + 1.0).max(0.0).min(n);
+    (a as u32, b as u32)
+}
+
+/// The rows of a polygon's sample box (as [`sample_rect`] has them; `None` when the
+/// box holds no sample).
+#[inline]
+fn box_rows(poly: &ViewPolygon<'_>, width: u32, height: u32) -> Option<(u32, u32)> {
+    let (mut minx, mut miny) = (f64::INFINITY, f64::INFINITY);
+    let (mut maxx, mut maxy) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+    for v in poly.vertices() {
+        minx = minx.min(v.x);
+        maxx = maxx.max(v.x);
+        miny = miny.min(v.y);
+        maxy = maxy.max(v.y);
+    }
+    if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
+        return None;
+    }
+    let (x0, x1) = sample_range(minx, maxx, width);
+    let (y0, y1) = sample_range(miny, maxy, height);
+    (x0 < x1 && y0 < y1).then_some((y0, y1))
+}
+
 impl EdgeTable {
     /// The table of every non-horizontal edge of the view's polygons that meets a
     /// sample line of a `width x height` image within its polygon's sample box.
@@ -157,16 +269,8 @@ impl EdgeTable {
         let mut rows: Vec<u32> = Vec::with_capacity(view.polygon_count() * 3);
         let mut edges: Vec<TableEdge> = Vec::with_capacity(view.polygon_count() * 3);
         for (k, poly) in view.polygons().enumerate() {
-            let (mut minx, mut miny) = (f64::INFINITY, f64::INFINITY);
-            let (mut maxx, mut maxy) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-            for v in poly.vertices() {
-                minx = minx.min(v.x);
-                maxx = maxx.max(v.x);
-                miny = miny.min(v.y);
-                maxy = maxy.max(v.y);
-            }
             // The box the coverage rule will use; no box, no coverage.
-            let Some(rect) = sample_rect(minx, miny, maxx, maxy, width, height) else {
+            let Some((y0, y1)) = box_rows(&poly, width, height) else {
                 continue;
             };
             let n = poly.len();
@@ -175,11 +279,12 @@ impl EdgeTable {
                 if p.y == q.y {
                     continue;
                 }
-                if let Some((first, _)) = edge_rows(p.y.min(q.y), p.y.max(q.y), rect.y0, rect.y1) {
+                if let Some((first, last)) = edge_rows(p.y.min(q.y), p.y.max(q.y), y0, y1) {
                     rows.push(first);
                     edges.push(TableEdge {
                         polygon: k as u32,
                         pair: pair as u32,
+                        last_row: last,
                     });
                 }
             }
@@ -196,7 +301,8 @@ impl EdgeTable {
         let mut sorted = vec![
             TableEdge {
                 polygon: 0,
-                pair: 0
+                pair: 0,
+                last_row: 0,
             };
             edges.len()
         ];
@@ -285,30 +391,4 @@ mod tests {
         }
     }
 
-    #[test]
-    fn crossing_is_corrected_from_a_bad_guess() {
-        use crate::raster::FillRule;
-        // A left edge from (2.2, 0) to (6.2, 8): at row 3 (y = 3.5) it is at x = 3.95,
-        // so the first pixel inside is 4 (centre 4.5 > 3.95 > 3.5).
-        let e = EdgeFunction::new((2.2, 0.0), (6.2, 8.0), -1.0, FillRule::TopLeft).unwrap();
-        let mut s = ScanEdge {
-            edge: e,
-            slot: 0,
-            index: 0,
-            left: e.sign < 0.0,
-            y_max: 8.0,
-            x: 0.0, // deliberately wrong
-            inverse_slope: 0.5,
-            last_row: 7,
-            x_lo: 0,
-            x_hi: 16,
-            pixel: 0,
-        };
-        assert!(s.left);
-        let off = s.cross(3.5);
-        assert_eq!(s.pixel, 4);
-        assert_eq!(off, 4);
-        s.x = 3.95;
-        assert_eq!(s.cross(3.5), 0);
-    }
 }
