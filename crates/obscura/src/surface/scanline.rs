@@ -42,7 +42,10 @@
 //! `max_active_faces`, `spans`, `spans_without_comparison`, `spans_decided_at_ends`,
 //! `spans_by_coherence`, `spans_per_pixel`, `depth_comparisons`,
 //! `comparisons_skipped_by_coherence`, `order_checks`, `orders_proven`,
-//! `crossing_corrections` (pixels the incremental `x` was off), `span_fallbacks`.
+//! `crossing_corrections` (pixels the incremental `x` was off), `span_fallbacks`, and
+//! the milliseconds of each stage: `table_ms` (building the edge table), `enter_ms`
+//! (new edges and the setup of their faces), `sweep_ms` (crossings settled, spans),
+//! `sort_ms` (crossings sorted) and `walk_ms` (spans decided and drawn).
 //!
 //! Complexity: O(E + H) to build the table (E edges, H rows), then per row O(A) for
 //! the A active edges (plus the out-of-order pairs the sort repairs), per span O(k)
@@ -228,6 +231,9 @@ struct Counters {
     orders_proven: u64,
     corrections: u64,
     fallbacks: u64,
+    /// Seconds spent building the table, entering edges, sweeping, sorting crossings
+    /// and walking them.
+    seconds: [f64; 5],
 }
 
 struct Scanner<'v> {
@@ -258,7 +264,9 @@ fn run(
 ) -> Result<(Frame, Stats, Vec<RowTrace>)> {
     let vp = view.viewport();
     let frame = Frame::new(vp)?;
+    let start = std::time::Instant::now();
     let table = EdgeTable::build(view, vp.width, vp.height);
+    let table_seconds = start.elapsed().as_secs_f64();
     let mut s = Scanner {
         view,
         transform: view.transform(),
@@ -315,6 +323,14 @@ fn run(
     stats.set("orders_proven", c.orders_proven as f64);
     stats.set("crossing_corrections", c.corrections as f64);
     stats.set("span_fallbacks", c.fallbacks as f64);
+    let ms = |s: f64| (s * 1e5).round() / 100.0;
+    stats.set("table_ms", ms(table_seconds));
+    for (name, &s) in ["enter_ms", "sweep_ms", "sort_ms", "walk_ms"]
+        .iter()
+        .zip(&c.seconds[1..])
+    {
+        stats.set(name, ms(s));
+    }
     Ok((s.frame, stats, traces))
 }
 
@@ -347,28 +363,45 @@ impl Scanner<'_> {
     /// One scanline: new edges, the sweep of the active edge list (crossings settled,
     /// spans of the faces, their crossings), the crossings sorted, and the walk.
     fn row(&mut self, y: u32, table: &EdgeTable) {
+        let t0 = std::time::Instant::now();
         self.enter_edges(y, table);
+        let t1 = std::time::Instant::now();
         if self.trace.is_some() {
             self.sweep::<true>(y);
         } else {
             self.sweep::<false>(y);
         }
+        let t2 = std::time::Instant::now();
         self.sort_crossings();
+        let t3 = std::time::Instant::now();
         self.walk(y);
         self.coherence.next_row();
         self.faces.end_row();
+        let t4 = std::time::Instant::now();
+        let s = &mut self.counters.seconds;
+        for (k, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4)]
+            .into_iter()
+            .enumerate()
+        {
+            s[k + 1] += (b - a).as_secs_f64();
+        }
     }
 
     /// Sets up the edges of the table that start on row `y` (and their faces, when
     /// their first edge arrives) and adds them to the active edge list.
     fn enter_edges(&mut self, y: u32, table: &EdgeTable) {
         let py = f64::from(y) + 0.5;
-        for &TableEdge {
-            polygon,
-            pair,
-            last_row,
-        } in table.bucket(y)
-        {
+        let bucket = table.bucket(y);
+        // Touch the first vertex of each polygon set up on this row first: their cache
+        // misses then overlap here instead of stalling the setups one after another.
+        let mut touched = 0.0;
+        for &TableEdge { polygon, .. } in bucket {
+            if self.faces.slot_of[polygon as usize] == NONE {
+                touched += self.view.polygon(polygon as usize).vertex(0).x;
+            }
+        }
+        std::hint::black_box(touched);
+        for &TableEdge { polygon, pair } in bucket {
             let mut s = self.faces.slot_of[polygon as usize];
             if s == NONE {
                 s = self.faces.activate(self.view, polygon);
@@ -380,6 +413,7 @@ impl Scanner<'_> {
                 continue;
             };
             let e = self.faces.edges.of(s)[k as usize];
+            let last_row = self.faces.edges.last_row(s, pair);
             debug_assert!(e.dy > 0.0 && last_row >= y);
             let inverse_slope = e.dx / e.dy;
             self.faces.add_edge(
@@ -701,9 +735,7 @@ impl Scanner<'_> {
     fn nearest(&mut self, y: u32, x0: u32, x1: u32) -> SpanDecision {
         let k = self.set.slot.len();
         let hash = self.set.hash;
-        let seen = self
-            .coherence
-            .find(x0, x1, hash, k, &self.faces.position);
+        let seen = self.coherence.find(x0, x1, hash, k, &self.faces.position);
         let k = k as u64;
         if let Some(s) = seen.filter(|s| s.order == Order::Fixed) {
             self.counters.by_coherence += 1;

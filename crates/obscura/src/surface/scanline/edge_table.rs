@@ -94,7 +94,11 @@ impl ScanEdge {
 #[inline]
 pub(crate) fn band(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
     let t = tolerance(e, s, rows);
-    if t.is_finite() { 0.5 - t } else { f64::NEG_INFINITY }
+    if t.is_finite() {
+        0.5 - t
+    } else {
+        f64::NEG_INFINITY
+    }
 }
 
 /// The crossing pixel of a left (`left`) or right edge with shared edge function `e`
@@ -137,9 +141,8 @@ pub(crate) fn tolerance(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
     let x_extent = e.ox.abs().max((e.ox + e.dx).abs()) + e.dx.abs() + 2.0;
     let y_extent = e.dy.abs() + 2.0;
     let s = s.abs();
-    let bound = 4.0
-        * u
-        * (x_extent + 8.0 * y_extent * s + (f64::from(rows) + 4.0) * (s + x_extent) + 4.0);
+    let bound =
+        4.0 * u * (x_extent + 8.0 * y_extent * s + (f64::from(rows) + 4.0) * (s + x_extent) + 4.0);
     if bound.is_finite() && bound < 0.25 {
         bound
     } else {
@@ -203,16 +206,13 @@ fn first_true(lo: i64, hi: i64, guess: i64, pred: impl Fn(i64) -> bool) -> i64 {
     i
 }
 
-/// An edge of the table: edge `pair` (from vertex `pair` to the next) of a polygon,
-/// and the last row it is active on.
+/// An edge of the table: edge `pair` (from vertex `pair` to the next) of a polygon.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TableEdge {
     /// The polygon's index in the view.
     pub polygon: u32,
     /// The edge's index in the polygon.
     pub pair: u32,
-    /// Its last row.
-    pub last_row: u32,
 }
 
 /// Edges bucketed by their first active row (flat arrays).
@@ -262,58 +262,65 @@ fn box_rows(poly: &ViewPolygon<'_>, width: u32, height: u32) -> Option<(u32, u32
     (x0 < x1 && y0 < y1).then_some((y0, y1))
 }
 
+/// Calls `f(pair, first)` for each edge of a polygon with box rows `y0..y1` that is
+/// active on some row, `first` being its first row.
+#[inline]
+fn for_each_edge(poly: &ViewPolygon<'_>, (y0, y1): (u32, u32), mut f: impl FnMut(u32, u32)) {
+    let n = poly.len();
+    for pair in 0..n {
+        let (p, q) = (poly.vertex(pair), poly.vertex((pair + 1) % n));
+        if p.y == q.y {
+            continue;
+        }
+        if let Some((first, _)) = edge_rows(p.y.min(q.y), p.y.max(q.y), y0, y1) {
+            f(pair as u32, first);
+        }
+    }
+}
+
 impl EdgeTable {
     /// The table of every non-horizontal edge of the view's polygons that meets a
-    /// sample line of a `width x height` image within its polygon's sample box.
+    /// sample line of a `width x height` image within its polygon's sample box: one
+    /// pass over the polygons (their vertices are read once, in memory order), then a
+    /// counting sort by first row.
     pub fn build(view: &PreparedView<'_>, width: u32, height: u32) -> Self {
-        let mut rows: Vec<u32> = Vec::with_capacity(view.polygon_count() * 3);
-        let mut edges: Vec<TableEdge> = Vec::with_capacity(view.polygon_count() * 3);
+        let mut placed: Vec<(u32, TableEdge)> = Vec::with_capacity(view.polygon_count() * 3);
         for (k, poly) in view.polygons().enumerate() {
             // The box the coverage rule will use; no box, no coverage.
-            let Some((y0, y1)) = box_rows(&poly, width, height) else {
-                continue;
-            };
-            let n = poly.len();
-            for pair in 0..n {
-                let (p, q) = (poly.vertex(pair), poly.vertex((pair + 1) % n));
-                if p.y == q.y {
-                    continue;
-                }
-                if let Some((first, last)) = edge_rows(p.y.min(q.y), p.y.max(q.y), y0, y1) {
-                    rows.push(first);
-                    edges.push(TableEdge {
-                        polygon: k as u32,
-                        pair: pair as u32,
-                        last_row: last,
-                    });
-                }
+            if let Some(rows) = box_rows(&poly, width, height) {
+                for_each_edge(&poly, rows, |pair, first| {
+                    placed.push((
+                        first,
+                        TableEdge {
+                            polygon: k as u32,
+                            pair,
+                        },
+                    ));
+                });
             }
         }
         // Bucket by first row with a counting sort (stable: polygon order in a bucket).
         let mut starts = vec![0u32; height as usize + 1];
-        for &row in &rows {
+        for &(row, _) in &placed {
             starts[row as usize + 1] += 1;
         }
         for r in 0..height as usize {
             starts[r + 1] += starts[r];
         }
         let mut next = starts.clone();
-        let mut sorted = vec![
+        let mut edges = vec![
             TableEdge {
                 polygon: 0,
-                pair: 0,
-                last_row: 0,
+                pair: 0
             };
-            edges.len()
+            placed.len()
         ];
-        for (&row, &e) in rows.iter().zip(&edges) {
-            sorted[next[row as usize] as usize] = e;
-            next[row as usize] += 1;
+        for &(row, e) in &placed {
+            let at = &mut next[row as usize];
+            edges[*at as usize] = e;
+            *at += 1;
         }
-        EdgeTable {
-            starts,
-            edges: sorted,
-        }
+        EdgeTable { starts, edges }
     }
 
     /// Number of edges.
@@ -390,5 +397,4 @@ mod tests {
             }
         }
     }
-
 }

@@ -20,12 +20,10 @@
 //! [`crate::raster::PolygonCoverage`]'s edges and box); bigger polygons go through
 //! `PolygonCoverage` itself.
 
-use super::edge_table::{ScanEdge, round_down, round_up, sample_range, tolerance};
-use crate::raster::{
-    DepthPlane, EdgeFunction, FillRule, PixelRect, PolygonCoverage, PolygonSetup,
-};
+use super::edge_table::{ScanEdge, edge_rows, round_down, round_up, sample_range, tolerance};
 #[cfg(doc)]
 use crate::raster::TriangleSetup;
+use crate::raster::{DepthPlane, EdgeFunction, FillRule, PixelRect, PolygonCoverage, PolygonSetup};
 use crate::view::PreparedView;
 
 /// `slot_of` for a polygon that is not live.
@@ -116,6 +114,10 @@ pub(crate) struct EdgeStore {
     /// Per slot: for polygons that are not triangles, the edge function index of each
     /// vertex pair (`NONE` for a zero-length pair).
     pair_edge: Vec<Vec<u32>>,
+    /// Per slot: the last row of the edge of each vertex pair (`INLINE_EDGES` per slot,
+    /// then the overflow).
+    last_rows: Vec<u32>,
+    last_rows_overflow: Vec<Vec<u32>>,
     count: Vec<u32>,
 }
 
@@ -154,10 +156,44 @@ impl EdgeStore {
         }
     }
 
+    /// The last row of the edge from vertex `pair` of the face in slot `s`.
+    #[inline]
+    pub fn last_row(&self, s: u32, pair: u32) -> u32 {
+        let (s, pair) = (s as usize, pair as usize);
+        if pair < INLINE_EDGES {
+            self.last_rows[s * INLINE_EDGES + pair]
+        } else {
+            self.last_rows_overflow[s][pair - INLINE_EDGES]
+        }
+    }
+
+    /// Records the last row of each vertex pair's edge of a polygon with box rows
+    /// `y0..y1` and these points (0 for a pair never active).
+    fn store_last_rows(
+        &mut self,
+        s: usize,
+        n: usize,
+        point: impl Fn(usize) -> (f64, f64),
+        rows: (u32, u32),
+    ) {
+        self.last_rows_overflow[s].clear();
+        for pair in 0..n {
+            let (p, q) = (point(pair), point((pair + 1) % n));
+            let last = edge_rows(p.1.min(q.1), p.1.max(q.1), rows.0, rows.1).map_or(0, |r| r.1);
+            if pair < INLINE_EDGES {
+                self.last_rows[s * INLINE_EDGES + pair] = last;
+            } else {
+                self.last_rows_overflow[s].push(last);
+            }
+        }
+    }
+
     fn grow(&mut self) {
         self.inline.extend_from_slice(&[NO_EDGE; INLINE_EDGES]);
         self.overflow.push(Vec::new());
         self.pair_edge.push(Vec::new());
+        self.last_rows.extend_from_slice(&[0; INLINE_EDGES]);
+        self.last_rows_overflow.push(Vec::new());
         self.count.push(0);
     }
 
@@ -279,24 +315,23 @@ pub(crate) fn setup_triangle(
 /// The tolerance `t` is taken for a steepest edge spanning the whole box (larger than
 /// each edge's own).
 fn triangle_check_rows(p: [(f64, f64, f64); 3], area2: f64, rows: u32) -> (u32, u32) {
-    let top = if p[1].1 < p[0].1 { 1 } else { 0 };
-    let top = if p[2].1 < p[top].1 { 2 } else { top };
-    let bottom = if p[1].1 >= p[0].1 { 1 } else { 0 };
-    let bottom = if p[2].1 >= p[bottom].1 { 2 } else { bottom };
-    if top == bottom {
-        return (0, u32::MAX);
-    }
-    let middle = 3 - top - bottom;
-    let (a, b, c) = (p[top], p[middle], p[bottom]);
-    let (minx, maxx) = (a.0.min(b.0).min(c.0), a.0.max(b.0).max(c.0));
+    let [p0, p1, p2] = p;
+    // The vertices in y order, by three compare-exchanges.
+    let (a, b) = if p1.1 < p0.1 { (p1, p0) } else { (p0, p1) };
+    let (b, c) = if p2.1 < b.1 { (p2, b) } else { (b, p2) };
+    let (a, b) = if b.1 < a.1 { (b, a) } else { (a, b) };
+    let (minx, maxx) = (p0.0.min(p1.0).min(p2.0), p0.0.max(p1.0).max(p2.0));
     let (w, h) = (maxx - minx + 2.0, c.1 - a.1 + 2.0);
-    let deltas = |p: (f64, f64, f64), q: (f64, f64, f64)| ((q.0 - p.0).abs(), (q.1 - p.1).abs());
-    let (ab, bc, ca) = (deltas(a, b), deltas(b, c), deltas(c, a));
-    // The steepest slope: the widest run over the shortest non-zero rise.
-    let rise = [ab.1, bc.1, ca.1]
-        .into_iter()
-        .filter(|&d| d > 0.0)
-        .fold(f64::INFINITY, f64::min);
+    let (ab, bc, ca) = (
+        ((b.0 - a.0).abs(), b.1 - a.1),
+        ((c.0 - b.0).abs(), c.1 - b.1),
+        ((a.0 - c.0).abs(), c.1 - a.1),
+    );
+    // The steepest slope: the widest run over the shortest non-zero rise (`ca` is the
+    // longest rise, non-zero for a triangle with an area).
+    let rise =
+        ca.1.min(if ab.1 > 0.0 { ab.1 } else { ca.1 })
+            .min(if bc.1 > 0.0 { bc.1 } else { ca.1 });
     let steep = ab.0.max(bc.0).max(ca.0) / rise;
     let reach = minx.abs().max(maxx.abs()) + (maxx - minx) + 2.0;
     let edge = EdgeFunction {
@@ -309,8 +344,8 @@ fn triangle_check_rows(p: [(f64, f64, f64); 3], area2: f64, rows: u32) -> (u32, 
     };
     let t = tolerance(&edge, steep, rows);
     let bound = |(dx, dy): (f64, f64)| dy * t + 16.0 * f64::EPSILON * (dx * h + dy * w);
-    let above = (b.1 - a.1) * bound(bc) / area2.abs();
-    let below = (c.1 - b.1) * bound(ab) / area2.abs();
+    let above = ab.1 * bound(bc) / area2.abs();
+    let below = bc.1 * bound(ab) / area2.abs();
     let eps = 2.0 * above.max(below) + 1e-9;
     if !(eps < 1e6 && b.1.abs() < 1e9) {
         return (0, u32::MAX);
@@ -375,8 +410,8 @@ impl Faces {
             let p = [vertex(0), vertex(1), vertex(2)];
             setup_triangle(p, fill, w, h).map(|(edges, rect, plane)| {
                 self.edges.store(si, &edges);
-                let area2 = (p[1].0 - p[0].0) * (p[2].1 - p[0].1)
-                    - (p[1].1 - p[0].1) * (p[2].0 - p[0].0);
+                let area2 =
+                    (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[1].1 - p[0].1) * (p[2].0 - p[0].0);
                 check = triangle_check_rows(p, area2, rect.y1 - rect.y0);
                 (rect, plane)
             })
@@ -411,6 +446,12 @@ impl Faces {
             self.slot_of[polygon as usize] = DEAD;
             return DEAD;
         };
+        self.edges.store_last_rows(
+            si,
+            n,
+            |k| (poly.vertex(k).x, poly.vertex(k).y),
+            (rect.y0, rect.y1),
+        );
         if n != 3 {
             // The setups made one edge function per pair of distinct consecutive points.
             let map = &mut self.edges.pair_edge[si];
