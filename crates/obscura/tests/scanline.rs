@@ -232,9 +232,11 @@ fn active_edge_list_and_spans_of_a_hand_worked_scene() {
 
 #[test]
 fn coherence_skips_comparisons_on_repeated_rows() {
-    // Three stacked rectangles over 40 identical rows: on each row the spans with two
-    // and three faces are decided at their ends twice (first row, then the row that
-    // proves the order), and reused on the 38 rows after.
+    // Three stacked rectangles over 40 identical rows, each nearer than the one left
+    // of it. On each row the spans where a nearer face enters ({0,1} and {0,1,2}) are
+    // decided at their ends twice (first row, then the row that proves the order) and
+    // reused on the 38 rows after; where face 0 leaves ({1,2}), face 2 stays the
+    // nearest, kept from the span before without any comparison, on every row.
     let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 48.0 - y, z);
     let rect = |x0: f64, x1: f64, z: f64| {
         vec![
@@ -256,12 +258,13 @@ fn coherence_skips_comparisons_on_repeated_rows() {
     let case = Case::new("stacked rectangles", scene_of(&polys), cam, 64, 48);
     let stats = case.assert_matches_zbuffer(ALGO);
     // Per row: [10,20) {0,1}, [20,30) {0,1,2}, [30,40) {1,2}: three multi-face spans.
-    assert_eq!(stats.get("spans_decided_at_ends"), Some(3.0 * 2.0));
-    assert_eq!(stats.get("spans_by_coherence"), Some(3.0 * 38.0));
-    // Skipped per reuse: 3 (k - 1) for k faces: 3 + 6 + 3.
+    assert_eq!(stats.get("spans_decided_at_ends"), Some(2.0 * 2.0));
+    assert_eq!(stats.get("spans_by_coherence"), Some(2.0 * 38.0));
+    assert_eq!(stats.get("spans_by_kept_nearest"), Some(40.0));
+    // Skipped per reuse: 3 (k - 1) for k faces: 3 + 6.
     assert_eq!(
         stats.get("comparisons_skipped_by_coherence"),
-        Some(12.0 * 38.0)
+        Some(9.0 * 38.0)
     );
     assert_eq!(stats.get("spans_without_comparison"), Some(2.0 * 40.0));
     assert_eq!(stats.get("spans"), Some(5.0 * 40.0));

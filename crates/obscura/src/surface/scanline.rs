@@ -13,11 +13,11 @@
 //!   first row whose sample line (`y = j + 0.5`) it meets. A polygon's coverage and
 //!   depth plane are set up when its first edge enters, and dropped when its last edge
 //!   leaves, so memory follows the faces under the scanline.
-//! - Per row: new edges join the active edge list; each steps `x += 1/m` and settles
-//!   its exact crossing pixel with the shared edge function
-//!   ([`crate::raster::EdgeFunction::inside_row`]), correcting the incremental guess;
-//!   the list is kept sorted by crossing (insertion sort: the order barely changes
-//!   from one row to the next; new edges are merged in).
+//! - Per row: new edges join the active edge list, held by their face (see
+//!   `faces`); each steps `x += 1/m` and settles its exact crossing pixel: from `x`
+//!   alone when `x` is provably far enough from every pixel centre, else with the
+//!   shared edge function ([`crate::raster::EdgeFunction::inside_row`]). The row's
+//!   crossings are then sorted by a counting sort over the columns.
 //! - A face's span on the row runs from its left crossing to its right one. Coverage
 //!   along a row is an interval, every pixel outside the crossings is outside an
 //!   edge, and the active edges hold both ends of the span by construction, so
@@ -31,7 +31,11 @@
 //!   than each other at both ends, by a margin that survives rounding, it is nearer all
 //!   along (the difference of two planes is affine), else the span is decided pixel by
 //!   pixel (faces that interpenetrate inside it, or near-ties).
-//! - Coherence: a span whose set of faces is the one of the previous row's span at the
+//! - Coherence along the row: the nearest face of a span is kept for the next spans
+//!   while the set of faces in changes only by faces it is proven to hide (each
+//!   entering face is compared with it once, at the first and last samples the two
+//!   share) and it does not leave; those spans need no depth comparison at all.
+//! - Coherence between rows: a span whose set of faces is the one of the previous row's span at the
 //!   same place reuses that span's nearest face without comparing, once the order is
 //!   known not to change: the winner must hide each other face over the whole overlap
 //!   of their sample boxes (checked once, at the box corners, when the set is seen on
@@ -40,16 +44,16 @@
 //! Input: a [`PreparedView`]; output: the same [`Frame`] as the z-buffer (face ids;
 //! depth from the same `f32` depth keys). Stats: `edges`, `max_active_edges`,
 //! `max_active_faces`, `spans`, `spans_without_comparison`, `spans_decided_at_ends`,
-//! `spans_by_coherence`, `spans_per_pixel`, `depth_comparisons`,
+//! `spans_by_kept_nearest`, `spans_by_coherence`, `spans_per_pixel`, `depth_comparisons`,
 //! `comparisons_skipped_by_coherence`, `order_checks`, `orders_proven`,
 //! `crossing_corrections` (pixels the incremental `x` was off), `span_fallbacks`, and
 //! the milliseconds of each stage: `table_ms` (building the edge table), `enter_ms`
 //! (new edges and the setup of their faces), `sweep_ms` (crossings settled, spans),
 //! `sort_ms` (crossings sorted) and `walk_ms` (spans decided and drawn).
 //!
-//! Complexity: O(E + H) to build the table (E edges, H rows), then per row O(A) for
-//! the A active edges (plus the out-of-order pairs the sort repairs), per span O(k)
-//! for its k faces, and O(k) per pixel only in spans decided pixel by pixel. Every
+//! Complexity: O(E + H) to build the table (E edges, H rows), then per row O(A + W)
+//! for the A active edges and W columns, per span O(1) when the kept nearest face
+//! decides it and O(k) for its k faces otherwise, and O(k) per pixel only in spans decided pixel by pixel. Every
 //! pixel is written once. Memory: 8 bytes per edge in the table, plus the active faces.
 //!
 //! Limitations: depth is exact for planar polygons (every prepared polygon is);
@@ -123,6 +127,9 @@ pub enum SpanDecision {
     SingleFace,
     /// Several faces, one nearer than the others at both ends of the span.
     NearestAtEnds,
+    /// Several faces, the nearest of the previous span on the row kept: no face that
+    /// entered since could be nearer (each was compared with it once, on entering).
+    KeptNearest,
     /// Several faces, the same set as the previous row's span here: its face reused.
     Coherence,
     /// Several faces whose order changes inside the span (or near-ties): per pixel.
@@ -161,6 +168,14 @@ pub struct RowTrace {
 struct Crossing {
     x: u32,
     data: u32,
+}
+
+impl Crossing {
+    /// Its place in the row's order: by pixel, leaving before entering.
+    #[inline(always)]
+    fn order(self) -> usize {
+        2 * self.x as usize + (self.data & 1) as usize
+    }
 }
 
 /// What the walk needs of a face entering the set of faces whose flag is in: its
@@ -223,6 +238,7 @@ struct Counters {
     spans: u64,
     without_comparison: u64,
     at_ends: u64,
+    kept: u64,
     by_coherence: u64,
     per_pixel: u64,
     comparisons: u64,
@@ -247,7 +263,8 @@ struct Scanner<'v> {
     unsorted: Vec<Crossing>,
     crossings: Vec<Crossing>,
     entering: Vec<Entering>,
-    /// Per pixel column (and one past the last), the number of crossings before it.
+    /// Per place in the crossings' order (see [`Crossing::order`]), the number of
+    /// crossings before it.
     bucket_starts: Vec<u32>,
     set: InSet,
     kept: Kept,
@@ -276,7 +293,7 @@ fn run(
         unsorted: Vec::new(),
         crossings: Vec::new(),
         entering: Vec::new(),
-        bucket_starts: vec![0; vp.width as usize + 2],
+        bucket_starts: vec![0; 2 * vp.width as usize + 3],
         set: InSet::default(),
         kept: Kept {
             slot: NONE,
@@ -315,6 +332,7 @@ fn run(
     stats.set("spans", c.spans as f64);
     stats.set("spans_without_comparison", c.without_comparison as f64);
     stats.set("spans_decided_at_ends", c.at_ends as f64);
+    stats.set("spans_by_kept_nearest", c.kept as f64);
     stats.set("spans_by_coherence", c.by_coherence as f64);
     stats.set("spans_per_pixel", c.per_pixel as f64);
     stats.set("depth_comparisons", c.comparisons as f64);
@@ -579,13 +597,15 @@ impl Scanner<'_> {
         }
     }
 
-    /// Sorts the row's crossings by pixel: a counting sort over the columns, stable,
-    /// O(crossings + width) (the seed's "sort the intersections ascending").
+    /// Sorts the row's crossings by pixel, faces leaving before faces entering at the
+    /// same pixel (an entering face is then never compared with one that has left): a
+    /// counting sort over the columns, stable, O(crossings + width) (the seed's "sort
+    /// the intersections ascending").
     fn sort_crossings(&mut self) {
         let starts = &mut self.bucket_starts;
         starts.fill(0);
         for c in &self.unsorted {
-            starts[c.x as usize + 1] += 1;
+            starts[c.order() + 1] += 1;
         }
         for i in 1..starts.len() {
             starts[i] += starts[i - 1];
@@ -594,7 +614,7 @@ impl Scanner<'_> {
         self.crossings.clear();
         self.crossings.resize(n, Crossing { x: 0, data: 0 });
         for &c in &self.unsorted {
-            let at = &mut starts[c.x as usize];
+            let at = &mut starts[c.order()];
             self.crossings[*at as usize] = c;
             *at += 1;
         }
@@ -728,11 +748,17 @@ impl Scanner<'_> {
         }
     }
 
-    /// Decides and draws a span with several faces: by coherence with the previous
-    /// row, else the kept nearest face, else by comparing the keys at the span's ends
+    /// Decides and draws a span with several faces: by the nearest face kept along the
+    /// row, else by coherence with the previous row, else by comparing the keys at the
+    /// span's ends
     /// (and, to keep the winner along the row, at the end of each face's common span
     /// with it), else pixel by pixel.
     fn nearest(&mut self, y: u32, x0: u32, x1: u32) -> SpanDecision {
+        if self.kept.valid {
+            self.counters.kept += 1;
+            self.fill(y, x0, x1, self.kept.slot);
+            return SpanDecision::KeptNearest;
+        }
         let k = self.set.slot.len();
         let hash = self.set.hash;
         let seen = self.coherence.find(x0, x1, hash, k, &self.faces.position);
@@ -752,12 +778,7 @@ impl Scanner<'_> {
             return SpanDecision::Coherence;
         }
 
-        let winner = if self.kept.valid {
-            Some(self.kept.slot)
-        } else {
-            self.nearest_at_ends(x0, x1)
-        };
-        if let Some(ws) = winner {
+        if let Some(ws) = self.nearest_at_ends(x0, x1) {
             self.counters.at_ends += 1;
             self.fill(y, x0, x1, ws);
             // The same set on the previous row: check once whether the order can
