@@ -78,7 +78,7 @@ use crate::view::{PreparedView, ViewTransform};
 
 use coherence::{Coherence, Order};
 use edge_table::{EdgeTable, ScanEdge, TableEdge, band, exact_pixel};
-use faces::{DEAD, Faces, NONE};
+use faces::{DEAD, Faces, NONE, slot_hash};
 use screen_faces::{hides, hides_over_overlap, stored_key, surely_nearer};
 
 /// Renders a prepared view with the scanline algorithm.
@@ -170,23 +170,14 @@ struct Crossing {
     data: u32,
 }
 
-impl Crossing {
-    /// Its place in the row's order: by pixel, leaving before entering.
-    #[inline(always)]
-    fn order(self) -> usize {
-        2 * self.x as usize + (self.data & 1) as usize
-    }
-}
-
 /// What the walk needs of a face entering the set of faces whose flag is in: its
 /// depth key along the row, `key(px) = c + dzdx (px - x0)`, the end of its span, its
-/// slot and hash.
+/// slot.
 #[derive(Clone, Copy, Debug)]
 struct Entering {
     c: f64,
     dzdx: f64,
     x0: f64,
-    hash: u64,
     slot: u32,
     end: u32,
 }
@@ -263,8 +254,7 @@ struct Scanner<'v> {
     unsorted: Vec<Crossing>,
     crossings: Vec<Crossing>,
     entering: Vec<Entering>,
-    /// Per place in the crossings' order (see [`Crossing::order`]), the number of
-    /// crossings before it.
+    /// Per pixel column (and one past the last), the number of crossings before it.
     bucket_starts: Vec<u32>,
     set: InSet,
     kept: Kept,
@@ -293,7 +283,7 @@ fn run(
         unsorted: Vec::new(),
         crossings: Vec::new(),
         entering: Vec::new(),
-        bucket_starts: vec![0; 2 * vp.width as usize + 3],
+        bucket_starts: vec![0; vp.width as usize + 2],
         set: InSet::default(),
         kept: Kept {
             slot: NONE,
@@ -554,7 +544,6 @@ impl Scanner<'_> {
                 c: p.z0 + p.dzdy * (py - p.y0),
                 dzdx: p.dzdx,
                 x0: p.x0,
-                hash: f.hash,
                 slot,
                 end: hi,
             });
@@ -599,13 +588,15 @@ impl Scanner<'_> {
 
     /// Sorts the row's crossings by pixel, faces leaving before faces entering at the
     /// same pixel (an entering face is then never compared with one that has left): a
-    /// counting sort over the columns, stable, O(crossings + width) (the seed's "sort
-    /// the intersections ascending").
+    /// counting sort over the columns, O(crossings + width) (the seed's "sort the
+    /// intersections ascending"). The sweep gives each face's crossings as a pair
+    /// (entering, leaving), so placing every second one first puts the leaving ones
+    /// first in each column.
     fn sort_crossings(&mut self) {
         let starts = &mut self.bucket_starts;
         starts.fill(0);
         for c in &self.unsorted {
-            starts[c.order() + 1] += 1;
+            starts[c.x as usize + 1] += 1;
         }
         for i in 1..starts.len() {
             starts[i] += starts[i - 1];
@@ -613,10 +604,16 @@ impl Scanner<'_> {
         let n = self.unsorted.len();
         self.crossings.clear();
         self.crossings.resize(n, Crossing { x: 0, data: 0 });
-        for &c in &self.unsorted {
-            let at = &mut starts[c.order()];
-            self.crossings[*at as usize] = c;
-            *at += 1;
+        let pairs = self.unsorted.chunks_exact(2);
+        debug_assert!(pairs.remainder().is_empty());
+        for side in [1, 0] {
+            for pair in pairs.clone() {
+                let c = pair[side];
+                debug_assert_eq!(c.data & 1, 1 - side as u32);
+                let at = &mut starts[c.x as usize];
+                self.crossings[*at as usize] = c;
+                *at += 1;
+            }
         }
     }
 
@@ -656,7 +653,7 @@ impl Scanner<'_> {
     fn enter(&mut self, k: usize, x: u32) {
         let e = self.entering[k];
         let set = &mut self.set;
-        set.hash ^= e.hash;
+        set.hash ^= slot_hash(e.slot);
         self.faces.position[e.slot as usize] = set.slot.len() as u32;
         set.slot.push(e.slot);
         let m = Member {
@@ -683,7 +680,7 @@ impl Scanner<'_> {
     #[inline]
     fn leave(&mut self, s: u32) {
         let set = &mut self.set;
-        set.hash ^= self.faces.info[s as usize].hash;
+        set.hash ^= slot_hash(s);
         let i = self.faces.position[s as usize] as usize;
         self.faces.position[s as usize] = NONE;
         set.slot.swap_remove(i);

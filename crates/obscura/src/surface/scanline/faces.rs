@@ -61,8 +61,6 @@ pub(crate) struct ScanFace {
     pub edges: [ScanEdge; FACE_EDGES],
     /// Its depth-key plane.
     pub plane: DepthPlane,
-    /// Its contribution to the order-independent hash of a set of faces.
-    pub hash: u64,
     /// The last row of its sample box.
     pub last_row: u32,
 }
@@ -100,8 +98,6 @@ pub(crate) struct FaceInfo {
     pub face: u32,
     /// Index in the view: identity and tie-break order.
     pub polygon: u32,
-    /// Its contribution to the order-independent hash of a set of faces.
-    pub hash: u64,
 }
 
 /// The edge functions of the faces, by slot.
@@ -248,10 +244,11 @@ const NO_PLANE: DepthPlane = DepthPlane {
     dzdy: 0.0,
 };
 
-/// A face's contribution to the order-independent hash of a set of faces.
-#[inline]
-fn face_hash(polygon: u32) -> u64 {
-    let mut z = u64::from(polygon).wrapping_add(0x9E37_79B9_7F4A_7C15);
+/// The contribution of the face in slot `slot` to the order-independent hash of a set
+/// of faces (a slot names the same face from one row to the next, see the module doc).
+#[inline(always)]
+pub(crate) fn slot_hash(slot: u32) -> u64 {
+    let mut z = u64::from(slot).wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -395,7 +392,6 @@ impl Faces {
                 },
                 face: 0,
                 polygon: 0,
-                hash: 0,
             });
             self.position.push(NONE);
             self.list_index.push(NONE);
@@ -467,13 +463,11 @@ impl Faces {
             }
             debug_assert_eq!(k, self.edges.count[si]);
         }
-        let hash = face_hash(polygon);
         self.info[si] = FaceInfo {
             plane,
             rect,
             face: poly.face,
             polygon,
-            hash,
         };
         self.position[si] = NONE;
         self.list_index[si] = self.list.len() as u32;
@@ -488,7 +482,6 @@ impl Faces {
             overflow: false,
             edges: [ScanEdge::NONE; FACE_EDGES],
             plane,
-            hash,
             last_row: rect.y1 - 1,
         });
         self.slot_of[polygon as usize] = s;
