@@ -77,7 +77,7 @@ use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewTransform};
 
 use coherence::{Coherence, Order};
-use edge_table::{EdgeTable, ScanEdge, TableEdge, band, exact_pixel};
+use edge_table::{EdgeTable, ScanEdge, TableEdge, exact_pixel, tolerance};
 use faces::{DEAD, Faces, NONE, slot_hash};
 use screen_faces::{hides, hides_over_overlap, stored_key, surely_nearer};
 
@@ -430,7 +430,7 @@ impl Scanner<'_> {
                 ScanEdge {
                     x: e.ox + (py - e.oy) * inverse_slope,
                     inverse_slope,
-                    band: band(&e, inverse_slope, last_row - y + 1),
+                    tolerance: tolerance(&e, inverse_slope, last_row - y + 1),
                     last_row,
                     index_left: ScanEdge::index_left(k, e.sign < 0.0),
                 },
@@ -473,11 +473,11 @@ impl Scanner<'_> {
             let slot = f.slot;
             let n = f.count as usize;
             let (x0, x1) = (f.x0, f.x1);
-            let (mut lo, mut hi_not, mut mask) = (x0, !x1, 0u64);
+            let (mut lo, mut hi_not) = (x0, !x1);
             if !f.overflow {
                 active_edges += n;
                 for e in &mut f.edges[..n] {
-                    let (pixel, off) = match ScanEdge::settled_pixel(e.x, e.band) {
+                    let (pixel, off) = match ScanEdge::settled_pixel(e.x, e.tolerance) {
                         Some(p) => (p.clamp(i64::from(x0), i64::from(x1)) as u32, 0),
                         None => exact_pixel(
                             &faces.edges.of(slot)[e.index() as usize],
@@ -494,8 +494,6 @@ impl Scanner<'_> {
                     let left = ((e.index_left as i32) >> 31) as u32;
                     lo = lo.max(pixel & left);
                     hi_not = hi_not.max(!pixel & !left);
-                    let k = e.index();
-                    mask |= u64::from(k < 64) << (k & 63);
                     if TRACE {
                         traced.push((slot, *e, pixel));
                     }
@@ -508,24 +506,31 @@ impl Scanner<'_> {
             if lo >= hi && !f.overflow {
                 continue;
             }
-            let edges = faces.edges.of(slot);
             let exact = if f.overflow {
                 false
-            } else if n < edges.len() && (f.check_from..f.check_to).contains(&y) {
-                let (pa, pb) = (f64::from(lo) + 0.5, f64::from(hi) - 0.5);
-                edges.iter().enumerate().all(|(k, e)| {
-                    if k < 64 && mask & (1 << k) != 0 {
-                        return true;
-                    }
-                    let row = e.row_term(py);
-                    e.inside_row(pa, row) && e.inside_row(pb, row)
-                })
-            } else {
+            } else if !(f.check_from..f.check_to).contains(&y) {
                 true
+            } else {
+                let edges = faces.edges.of(slot);
+                // The edges active on the row hold both ends by construction.
+                let mask = f.edges[..n].iter().fold(0u64, |m, e| {
+                    let k = e.index();
+                    m | u64::from(k < 64) << (k & 63)
+                });
+                let (pa, pb) = (f64::from(lo) + 0.5, f64::from(hi) - 0.5);
+                n >= edges.len()
+                    || edges.iter().enumerate().all(|(k, e)| {
+                        if k < 64 && mask & (1 << k) != 0 {
+                            return true;
+                        }
+                        let row = e.row_term(py);
+                        e.inside_row(pa, row) && e.inside_row(pb, row)
+                    })
             };
             if !exact {
                 self.counters.fallbacks += 1;
                 let rect = faces.info[slot as usize].rect;
+                let edges = faces.edges.of(slot);
                 (lo, hi) = row_span(edges, rect, y, 0, self.width).unwrap_or((lo, lo));
                 if lo >= hi {
                     continue;

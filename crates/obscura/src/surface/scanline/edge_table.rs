@@ -30,10 +30,10 @@ pub(crate) struct ScanEdge {
     pub x: f64,
     /// `dx/dy`, the seed's `1/m`.
     pub inverse_slope: f64,
-    /// `0.5 - t` for the [`tolerance`] `t` of the edge: how far `x` may be from the
-    /// exact crossing, plus how near a pixel centre the shared edge test may round the
-    /// wrong way, over every row of the edge. Minus infinity when no bound is known.
-    pub band: f64,
+    /// The [`tolerance`] of the edge: how far `x` may be from the exact crossing, plus
+    /// how near a pixel centre the shared edge test may round the wrong way, over
+    /// every row of the edge. Infinite when no bound is known.
+    pub tolerance: f64,
     /// The last row it is active on.
     pub last_row: u32,
     /// Its index among its face's edge functions; the top bit tells a left edge.
@@ -47,7 +47,7 @@ impl ScanEdge {
     pub const NONE: ScanEdge = ScanEdge {
         x: 0.0,
         inverse_slope: 0.0,
-        band: f64::NEG_INFINITY,
+        tolerance: f64::INFINITY,
         last_row: 0,
         index_left: 0,
     };
@@ -72,32 +72,23 @@ impl ScanEdge {
     }
 
     /// The crossing pixel (not clamped) when `x` settles it: the first pixel whose
-    /// centre lies right of `x`, if every centre is farther from `x` than the
-    /// tolerance (`band = 0.5 - tolerance`). The shared edge test is then known to
-    /// switch exactly there: it is monotonic along the row and agrees with the exact
-    /// sign at the two centres around the crossing. `None` sends the edge to
-    /// [`exact_pixel`].
+    /// centre lies right of `x`, `floor(x - 0.5) + 1`, if every centre is farther
+    /// from `x` than `tolerance`. The shared edge test is then known to switch exactly
+    /// there: it is monotonic along the row and agrees with the exact sign at the two
+    /// centres around the crossing. `None` sends the edge to [`exact_pixel`].
     ///
-    /// A finite tolerance bounds `|x|` far below `2^52` (see [`tolerance`]), where the
-    /// truncation is exact; it is the floor for `x >= 0.5`, and anything left of that
-    /// (or NaN) fails the test.
+    /// `v = x - 0.5` is rounded to the nearest integer `r` by adding and subtracting
+    /// `1.5 * 2^52` (exact for `|v| < 2^30`, which is checked), and the low bits of
+    /// the sum are `r` itself; `v - r` is then exact, so the distance to the nearest
+    /// centre is compared without rounding. NaN fails every test.
     #[inline(always)]
-    pub fn settled_pixel(x: f64, band: f64) -> Option<i64> {
+    pub fn settled_pixel(x: f64, tolerance: f64) -> Option<i64> {
+        const ROUND: f64 = 6_755_399_441_055_744.0;
         let v = x - 0.5;
-        let t = v as i64;
-        let frac = v - t as f64;
-        ((frac - 0.5).abs() < band).then_some(t + 1)
-    }
-}
-
-/// `0.5 -` [`tolerance`]: the [`ScanEdge::band`] of an edge.
-#[inline]
-pub(crate) fn band(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
-    let t = tolerance(e, s, rows);
-    if t.is_finite() {
-        0.5 - t
-    } else {
-        f64::NEG_INFINITY
+        let sum = v + ROUND;
+        let d = v - (sum - ROUND);
+        let r = i64::from(sum.to_bits() as u32 as i32);
+        (v.abs() < 1_073_741_824.0 && d.abs() > tolerance).then_some(r + i64::from(d > 0.0))
     }
 }
 
@@ -167,25 +158,37 @@ fn ceil_within(v: f64, lo: i64, hi: i64) -> i64 {
 
 /// Above this every `f64` is an integer.
 const ALL_INTEGERS: f64 = 4_503_599_627_370_496.0;
+/// Below this (in magnitude) adding and subtracting [`ROUND_TO_INTEGER`] rounds to the
+/// nearest integer.
+const ROUNDS_EXACTLY: f64 = 2_251_799_813_685_248.0;
+/// `1.5 * 2^52`: a sum with it has no fraction bits left.
+const ROUND_TO_INTEGER: f64 = 6_755_399_441_055_744.0;
 
-/// `v.ceil()` by truncation (no C library call on targets without a rounding
-/// instruction); NaN stays NaN.
+/// `v` rounded to an integer, the nearest one for `|v| < 2^51` (no C library call
+/// on targets without a rounding instruction); else by truncation, or `v` itself
+/// from `2^52` on (every such `f64` is an integer) and for NaN.
+#[inline(always)]
+fn round_near(v: f64) -> f64 {
+    if v.abs() < ROUNDS_EXACTLY {
+        (v + ROUND_TO_INTEGER) - ROUND_TO_INTEGER
+    } else if v.abs() < ALL_INTEGERS {
+        v as i64 as f64
+    } else {
+        v
+    }
+}
+
+/// `v.ceil()` without a C library call; NaN stays NaN.
 #[inline(always)]
 pub(crate) fn round_up(v: f64) -> f64 {
-    if !(v.abs() < ALL_INTEGERS) {
-        return v;
-    }
-    let t = v as i64 as f64;
+    let t = round_near(v);
     if t < v { t + 1.0 } else { t }
 }
 
-/// `v.floor()` by truncation; NaN stays NaN.
+/// `v.floor()` without a C library call; NaN stays NaN.
 #[inline(always)]
 pub(crate) fn round_down(v: f64) -> f64 {
-    if !(v.abs() < ALL_INTEGERS) {
-        return v;
-    }
-    let t = v as i64 as f64;
+    let t = round_near(v);
     if t > v { t - 1.0 } else { t }
 }
 
@@ -380,13 +383,43 @@ mod tests {
             -7.999_999_999,
             1e15 + 0.5,
             -1e15 - 0.5,
+            2_251_799_813_685_247.5,
+            -2_251_799_813_685_247.5,
+            3e15 + 0.5,
+            -3e15 - 0.5,
+            4_503_599_627_370_495.5,
             1e20,
             -1e20,
+            0.49999999999999994,
+            -0.49999999999999994,
+            1.5,
+            -1.5,
+            1e300,
         ] {
             assert_eq!(round_up(v), v.ceil(), "{v}");
             assert_eq!(round_down(v), v.floor(), "{v}");
         }
         assert!(round_up(f64::NAN).is_nan() && round_down(f64::INFINITY).is_infinite());
+    }
+
+    #[test]
+    fn settled_pixel_is_the_first_centre_right_of_x_when_far_from_centres() {
+        let t = 1e-6;
+        let mut xs = vec![f64::NAN, f64::INFINITY, -f64::INFINITY, 1e12, -1e12, 3e9];
+        for k in -40..400 {
+            let c = f64::from(k) * 0.25;
+            xs.extend([c, c + 1e-7, c - 1e-7, c + 2e-6, c - 2e-6, c + 0.1, c + 0.37]);
+        }
+        for x in xs {
+            let v = x - 0.5;
+            // Independent expectation: the library floor and the distance to the
+            // nearest centre.
+            let far = (v - v.round()).abs() > t && v.abs() < 1e9;
+            let expected = far.then(|| (v.floor() + 1.0) as i64);
+            assert_eq!(ScanEdge::settled_pixel(x, t), expected, "{x}");
+        }
+        // An unknown bound settles nothing.
+        assert_eq!(ScanEdge::settled_pixel(3.2, f64::INFINITY), None);
     }
 
     #[test]
