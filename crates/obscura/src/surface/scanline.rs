@@ -220,6 +220,8 @@ struct InSet {
 struct Kept {
     slot: u32,
     valid: bool,
+    /// Its keys along the row (a copy: it does not change while the face is in).
+    member: Member,
 }
 
 #[derive(Debug, Default)]
@@ -258,7 +260,6 @@ struct Scanner<'v> {
     bucket_starts: Vec<u32>,
     set: InSet,
     kept: Kept,
-    keys: Vec<f64>,
     coherence: Coherence,
     counters: Counters,
     trace: Option<RowTrace>,
@@ -288,8 +289,13 @@ fn run(
         kept: Kept {
             slot: NONE,
             valid: false,
+            member: Member {
+                c: 0.0,
+                dzdx: 0.0,
+                x0: 0.0,
+                end: 0,
+            },
         },
-        keys: Vec::new(),
         coherence: Coherence::default(),
         counters: Counters::default(),
         trace: None,
@@ -669,14 +675,12 @@ impl Scanner<'_> {
         };
         set.member.push(m);
         if self.kept.valid {
-            let w = set.member[self.faces.position[self.kept.slot as usize] as usize];
+            let w = self.kept.member;
             let last = w.end.min(e.end);
             let (a, b) = (f64::from(x) + 0.5, f64::from(last) - 0.5);
-            self.counters.comparisons += 1;
-            let hides = last > x && surely_nearer(w.key(a), m.key(a)) && {
-                self.counters.comparisons += 1;
-                surely_nearer(w.key(b), m.key(b))
-            };
+            let hides_at_a = last > x && surely_nearer(w.key(a), m.key(a));
+            let hides = hides_at_a && surely_nearer(w.key(b), m.key(b));
+            self.counters.comparisons += 1 + u64::from(hides_at_a);
             self.kept.valid = hides;
         }
     }
@@ -711,6 +715,7 @@ impl Scanner<'_> {
                 self.kept = Kept {
                     slot: s,
                     valid: true,
+                    member: self.set.member[0],
                 };
                 SpanDecision::SingleFace
             }
@@ -776,6 +781,7 @@ impl Scanner<'_> {
             self.kept = Kept {
                 slot: s.winner,
                 valid: true,
+                member: self.set.member[self.faces.position[s.winner as usize] as usize],
             };
             return SpanDecision::Coherence;
         }
@@ -830,39 +836,50 @@ impl Scanner<'_> {
     /// also nearer at the last sample each face shares with it on the row, it is kept
     /// as the nearest for the next spans.
     fn nearest_at_ends(&mut self, x0: u32, x1: u32) -> Option<u32> {
-        let members = &self.set.member;
+        let members = &self.set.member[..];
         let (pl, pr) = (f64::from(x0) + 0.5, f64::from(x1) - 0.5);
-        self.keys.clear();
-        self.keys.extend(members.iter().map(|m| m.key(pl)));
-        let keys = &self.keys[..];
-        let best = keys.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-        let w = keys.iter().position(|&k| k == best)?;
-        let c = &mut self.counters;
-        c.comparisons += keys.len() as u64 - 1;
-        let mw = members[w];
+        // The first face with the largest key at the left end (NaN never wins).
+        let (mut w, mut best) = (usize::MAX, f64::NEG_INFINITY);
+        for (g, m) in members.iter().enumerate() {
+            let kg = m.key(pl);
+            if kg > best {
+                (w, best) = (g, kg);
+            }
+        }
+        let mw = *members.get(w)?;
+        // Comparisons are counted locally and added once (also when giving up).
+        let mut comparisons = members.len() as u64 - 1;
         let mut kept = true;
-        for (g, (m, &kg)) in members.iter().zip(keys).enumerate() {
+        let mut proven = true;
+        for (g, m) in members.iter().enumerate() {
             if g == w {
                 continue;
             }
-            c.comparisons += 1;
-            if !surely_nearer(best, kg) {
-                return None;
+            comparisons += 1;
+            if !surely_nearer(best, m.key(pl)) {
+                proven = false;
+                break;
             }
             let b = f64::from(mw.end.min(m.end)) - 0.5;
-            c.comparisons += 1;
+            comparisons += 1;
             if !surely_nearer(mw.key(b), m.key(b)) {
                 kept = false;
-                c.comparisons += 1;
+                comparisons += 1;
                 if !surely_nearer(mw.key(pr), m.key(pr)) {
-                    return None;
+                    proven = false;
+                    break;
                 }
             }
+        }
+        self.counters.comparisons += comparisons;
+        if !proven {
+            return None;
         }
         let ws = self.set.slot[w];
         self.kept = Kept {
             slot: ws,
             valid: kept,
+            member: mw,
         };
         Some(ws)
     }
