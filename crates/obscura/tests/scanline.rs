@@ -309,6 +309,42 @@ fn coherence_is_not_used_when_faces_interpenetrate() {
 }
 
 #[test]
+fn a_face_hidden_over_its_whole_span_is_left_out_on_entering() {
+    // Face 0: the square (2,2)-(16,10) at z = 1, nearer; face 1: the triangle (6,4)
+    // (14,4) (6,8) at z = 0, behind it. On rows 4..=7 the triangle enters inside the
+    // square's span and ends before it: the square, kept as the nearest face, is
+    // nearer at the triangle's first and last samples, so the triangle is left out
+    // (two comparisons each time) and every span holds the square alone.
+    let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 12.0 - y, z);
+    let polys = vec![
+        vec![
+            flip(2., 2., 1.),
+            flip(16., 2., 1.),
+            flip(16., 10., 1.),
+            flip(2., 10., 1.),
+        ],
+        vec![flip(6., 4., 0.), flip(14., 4., 0.), flip(6., 8., 0.)],
+    ];
+    let cam = Camera::orthographic(
+        DVec3::new(10.0, 6.0, 10.0),
+        DVec3::new(10.0, 6.0, 0.0),
+        DVec3::Y,
+        12.0,
+        1.0,
+        20.0,
+    );
+    let case = Case::new("triangle behind a square", scene_of(&polys), cam, 20, 12);
+    let stats = case.assert_matches_zbuffer(ALGO);
+    assert_eq!(stats.get("faces_hidden_on_entering"), Some(4.0));
+    assert_eq!(stats.get("depth_comparisons"), Some(8.0));
+    // Rows 2, 3, 8, 9: one span; rows 4..=7: split at the triangle's crossings.
+    assert_eq!(stats.get("spans"), Some(4.0 + 4.0 * 3.0));
+    assert_eq!(stats.get("spans_without_comparison"), Some(16.0));
+    let ((frame, _), _) = case.render_pair(ALGO);
+    assert_eq!(frame.id(8, 5), 0);
+}
+
+#[test]
 fn degenerate_polygons_are_skipped_without_panic() {
     // A zero-area triangle (collinear) and a triangle smaller than a pixel between
     // samples: neither covers anything.
