@@ -487,7 +487,7 @@ impl Scanner<'_> {
             let (mut lo, mut hi_not) = (x0, !x1);
             if !f.overflow {
                 active_edges += n;
-                for e in &mut f.edges[..n] {
+                for e in f.edges.iter_mut().take(n) {
                     let (pixel, off) = match ScanEdge::settled_pixel(e.x, e.tolerance) {
                         Some(p) => (p.clamp(i64::from(x0), i64::from(x1)) as u32, 0),
                         None => exact_pixel(
