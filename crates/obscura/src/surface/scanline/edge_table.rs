@@ -134,11 +134,7 @@ pub(crate) fn tolerance(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
     let s = s.abs();
     let bound =
         4.0 * u * (x_extent + 8.0 * y_extent * s + (f64::from(rows) + 4.0) * (s + x_extent) + 4.0);
-    if bound.is_finite() && bound < 0.25 {
-        bound
-    } else {
-        f64::INFINITY
-    }
+    if bound < 0.25 { bound } else { f64::INFINITY }
 }
 
 /// `ceil(v)` clamped to `lo..=hi` (`lo >= 0`; `lo` for NaN), without a call to the

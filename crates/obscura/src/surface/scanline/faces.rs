@@ -184,6 +184,16 @@ impl EdgeStore {
         }
     }
 
+    /// [`Self::store_last_rows`] for a triangle.
+    #[inline]
+    fn store_triangle_last_rows(&mut self, s: usize, p: &[(f64, f64, f64); 3], rows: (u32, u32)) {
+        let at = s * INLINE_EDGES;
+        for (pair, last) in self.last_rows[at..at + 3].iter_mut().enumerate() {
+            let (a, b) = (p[pair].1, p[[1, 2, 0][pair]].1);
+            *last = edge_rows(a.min(b), a.max(b), rows.0, rows.1).map_or(0, |r| r.1);
+        }
+    }
+
     fn grow(&mut self) {
         self.inline.extend_from_slice(&[NO_EDGE; INLINE_EDGES]);
         self.overflow.push(Vec::new());
@@ -408,6 +418,8 @@ impl Faces {
                 let area2 =
                     (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[1].1 - p[0].1) * (p[2].0 - p[0].0);
                 check = triangle_check_rows(p, area2, rect.y1 - rect.y0);
+                self.edges
+                    .store_triangle_last_rows(si, &p, (rect.y0, rect.y1));
                 (rect, plane)
             })
         } else if PolygonSetup::<16>::fits(n) {
@@ -441,13 +453,13 @@ impl Faces {
             self.slot_of[polygon as usize] = DEAD;
             return DEAD;
         };
-        self.edges.store_last_rows(
-            si,
-            n,
-            |k| (poly.vertex(k).x, poly.vertex(k).y),
-            (rect.y0, rect.y1),
-        );
         if n != 3 {
+            self.edges.store_last_rows(
+                si,
+                n,
+                |k| (poly.vertex(k).x, poly.vertex(k).y),
+                (rect.y0, rect.y1),
+            );
             // The setups made one edge function per pair of distinct consecutive points.
             let map = &mut self.edges.pair_edge[si];
             let mut k = 0;
