@@ -621,8 +621,10 @@ impl Scanner<'_> {
         for c in &self.unsorted {
             starts[c.x as usize + 1] += 1;
         }
-        for i in 1..starts.len() {
-            starts[i] += starts[i - 1];
+        let mut before = 0;
+        for start in starts.iter_mut() {
+            before += *start;
+            *start = before;
         }
         let n = self.unsorted.len();
         self.crossings.clear();
