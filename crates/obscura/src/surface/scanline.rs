@@ -627,8 +627,11 @@ impl Scanner<'_> {
             *start = before;
         }
         let n = self.unsorted.len();
-        self.crossings.clear();
-        self.crossings.resize(n, Crossing { x: 0, data: 0 });
+        // Every one of the first `n` is written below: the array only grows, so that
+        // it is not cleared row after row.
+        if self.crossings.len() < n {
+            self.crossings.resize(n, Crossing { x: 0, data: 0 });
+        }
         let pairs = self.unsorted.chunks_exact(2);
         debug_assert!(pairs.remainder().is_empty());
         for side in [1, 0] {
@@ -644,7 +647,8 @@ impl Scanner<'_> {
 
     /// Walks the crossings left to right, flipping flags and deciding each span.
     fn walk(&mut self, y: u32) {
-        let crossings = std::mem::take(&mut self.crossings);
+        let all = std::mem::take(&mut self.crossings);
+        let crossings = &all[..self.unsorted.len()];
         self.kept.valid = false;
         let mut x = 0;
         let mut i = 0;
@@ -668,7 +672,7 @@ impl Scanner<'_> {
         if x < self.width {
             self.span(y, x, self.width);
         }
-        self.crossings = crossings;
+        self.crossings = all;
     }
 
     /// Entering face `k` of the row enters at pixel `x`: its flag is in. The kept
