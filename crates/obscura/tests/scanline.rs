@@ -232,9 +232,11 @@ fn active_edge_list_and_spans_of_a_hand_worked_scene() {
 
 #[test]
 fn coherence_skips_comparisons_on_repeated_rows() {
-    // Three stacked rectangles over 40 identical rows: on each row the spans with two
-    // and three faces are decided at their ends twice (first row, then the row that
-    // proves the order), and reused on the 38 rows after.
+    // Three stacked rectangles over 40 identical rows, each nearer than the one left
+    // of it. On each row the spans where a nearer face enters ({0,1} and {0,1,2}) are
+    // decided at their ends twice (first row, then the row that proves the order) and
+    // reused on the 38 rows after; where face 0 leaves ({1,2}), face 2 stays the
+    // nearest, kept from the span before without any comparison, on every row.
     let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 48.0 - y, z);
     let rect = |x0: f64, x1: f64, z: f64| {
         vec![
@@ -256,12 +258,13 @@ fn coherence_skips_comparisons_on_repeated_rows() {
     let case = Case::new("stacked rectangles", scene_of(&polys), cam, 64, 48);
     let stats = case.assert_matches_zbuffer(ALGO);
     // Per row: [10,20) {0,1}, [20,30) {0,1,2}, [30,40) {1,2}: three multi-face spans.
-    assert_eq!(stats.get("spans_decided_at_ends"), Some(3.0 * 2.0));
-    assert_eq!(stats.get("spans_by_coherence"), Some(3.0 * 38.0));
-    // Skipped per reuse: 3 (k - 1) for k faces: 3 + 6 + 3.
+    assert_eq!(stats.get("spans_decided_at_ends"), Some(2.0 * 2.0));
+    assert_eq!(stats.get("spans_by_coherence"), Some(2.0 * 38.0));
+    assert_eq!(stats.get("spans_by_kept_nearest"), Some(40.0));
+    // Skipped per reuse: 3 (k - 1) for k faces: 3 + 6.
     assert_eq!(
         stats.get("comparisons_skipped_by_coherence"),
-        Some(12.0 * 38.0)
+        Some(9.0 * 38.0)
     );
     assert_eq!(stats.get("spans_without_comparison"), Some(2.0 * 40.0));
     assert_eq!(stats.get("spans"), Some(5.0 * 40.0));
@@ -303,6 +306,42 @@ fn coherence_is_not_used_when_faces_interpenetrate() {
     // Left of x = 20 the flat one (face 0) is nearer, right of it the tilted one.
     assert_eq!(frame.id(10, 10), 0);
     assert_eq!(frame.id(30, 10), 1);
+}
+
+#[test]
+fn a_face_hidden_over_its_whole_span_is_left_out_on_entering() {
+    // Face 0: the square (2,2)-(16,10) at z = 1, nearer; face 1: the triangle (6,4)
+    // (14,4) (6,8) at z = 0, behind it. On rows 4..=7 the triangle enters inside the
+    // square's span and ends before it: the square, kept as the nearest face, is
+    // nearer at the triangle's first and last samples, so the triangle is left out
+    // (two comparisons each time) and every span holds the square alone.
+    let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 12.0 - y, z);
+    let polys = vec![
+        vec![
+            flip(2., 2., 1.),
+            flip(16., 2., 1.),
+            flip(16., 10., 1.),
+            flip(2., 10., 1.),
+        ],
+        vec![flip(6., 4., 0.), flip(14., 4., 0.), flip(6., 8., 0.)],
+    ];
+    let cam = Camera::orthographic(
+        DVec3::new(10.0, 6.0, 10.0),
+        DVec3::new(10.0, 6.0, 0.0),
+        DVec3::Y,
+        12.0,
+        1.0,
+        20.0,
+    );
+    let case = Case::new("triangle behind a square", scene_of(&polys), cam, 20, 12);
+    let stats = case.assert_matches_zbuffer(ALGO);
+    assert_eq!(stats.get("faces_hidden_on_entering"), Some(4.0));
+    assert_eq!(stats.get("depth_comparisons"), Some(8.0));
+    // Rows 2, 3, 8, 9: one span; rows 4..=7: split at the triangle's crossings.
+    assert_eq!(stats.get("spans"), Some(4.0 + 4.0 * 3.0));
+    assert_eq!(stats.get("spans_without_comparison"), Some(16.0));
+    let ((frame, _), _) = case.render_pair(ALGO);
+    assert_eq!(frame.id(8, 5), 0);
 }
 
 #[test]

@@ -13,11 +13,11 @@
 //!   first row whose sample line (`y = j + 0.5`) it meets. A polygon's coverage and
 //!   depth plane are set up when its first edge enters, and dropped when its last edge
 //!   leaves, so memory follows the faces under the scanline.
-//! - Per row: new edges join the active edge list; each steps `x += 1/m` and settles
-//!   its exact crossing pixel with the shared edge function
-//!   ([`crate::raster::EdgeFunction::inside_row`]), correcting the incremental guess;
-//!   the list is kept sorted by crossing (insertion sort: the order barely changes
-//!   from one row to the next; new edges are merged in).
+//! - Per row: new edges join the active edge list, held by their face (see
+//!   `faces`); each steps `x += 1/m` and settles its exact crossing pixel: from `x`
+//!   alone when `x` is provably far enough from every pixel centre, else with the
+//!   shared edge function ([`crate::raster::EdgeFunction::inside_row`]). The row's
+//!   crossings are then sorted by a counting sort over the columns.
 //! - A face's span on the row runs from its left crossing to its right one. Coverage
 //!   along a row is an interval, every pixel outside the crossings is outside an
 //!   edge, and the active edges hold both ends of the span by construction, so
@@ -31,43 +31,62 @@
 //!   than each other at both ends, by a margin that survives rounding, it is nearer all
 //!   along (the difference of two planes is affine), else the span is decided pixel by
 //!   pixel (faces that interpenetrate inside it, or near-ties).
-//! - Coherence: a span whose set of faces is the one of the previous row's span at the
-//!   same place reuses that span's nearest face without comparing, once the order is
-//!   known not to change: the winner must hide each other face over the whole overlap
-//!   of their sample boxes (checked once, at the box corners, when the set is seen on
-//!   two consecutive rows; a failed check is not retried while the set lasts).
+//! - Coherence along the row: the nearest face of a span is kept for the next spans
+//!   while the set of faces in changes only by faces it is proven to hide (each
+//!   entering face is compared with it once, at the first and last samples the two
+//!   share) and it does not leave; those spans need no depth comparison at all. An
+//!   entering face it hides over the entering face's whole span on the row can never
+//!   be seen there, and is left out of the set of faces in.
+//! - Coherence between rows (when no face is kept): a span whose set of faces is the
+//!   one of the previous row's span at the same place reuses that span's nearest face
+//!   without comparing, once the order is known not to change: the winner must hide
+//!   each other face over the whole overlap of their sample boxes (checked once, at
+//!   the box corners, when the set is seen on two consecutive rows; a failed check is
+//!   not retried while the set lasts).
 //!
 //! Input: a [`PreparedView`]; output: the same [`Frame`] as the z-buffer (face ids;
 //! depth from the same `f32` depth keys). Stats: `edges`, `max_active_edges`,
 //! `max_active_faces`, `spans`, `spans_without_comparison`, `spans_decided_at_ends`,
-//! `spans_by_coherence`, `spans_per_pixel`, `depth_comparisons`,
-//! `comparisons_skipped_by_coherence`, `order_checks`, `orders_proven`,
-//! `crossing_corrections` (pixels the incremental `x` was off), `span_fallbacks`.
+//! `spans_by_kept_nearest`, `faces_hidden_on_entering`, `spans_by_coherence`,
+//! `spans_per_pixel`, `depth_comparisons`, `comparisons_skipped_by_coherence`,
+//! `order_checks`, `orders_proven`, `crossing_corrections` (pixels the incremental
+//! `x` was off), `span_fallbacks`, and
+//! the milliseconds of each stage: `table_ms` (building the edge table), `enter_ms`
+//! (new edges and the setup of their faces), `sweep_ms` (crossings settled, spans),
+//! `sort_ms` (crossings sorted) and `walk_ms` (spans decided and drawn).
 //!
-//! Complexity: O(E + H) to build the table (E edges, H rows), then per row O(A) for
-//! the A active edges (plus the out-of-order pairs the sort repairs), per span O(k)
-//! for its k faces, and O(k) per pixel only in spans decided pixel by pixel. Every
-//! pixel is written once. Memory: 8 bytes per edge in the table, plus the active faces.
+//! Complexity: O(E + H) to build the table (E edges, H rows), then per row O(A + W)
+//! for the A active edges and W columns, per span O(1) when the kept nearest face
+//! decides it and O(k) for its k faces otherwise, and O(k) per pixel only in spans
+//! decided pixel by pixel. Every pixel is written once. Memory: 8 bytes per edge in
+//! the table, plus the active faces.
 //!
 //! Limitations: depth is exact for planar polygons (every prepared polygon is);
 //! near-ties are decided on the `f32` keys the z-buffer stores, so the two agree
 //! there too unless the z-buffer's own rounding path differs. The order check behind
 //! coherence is conservative: faces that touch (a wall standing on a floor) never
-//! pass it, so their spans keep being compared at their ends. Single-threaded.
+//! pass it, so their spans keep being compared at their ends. The work is per face
+//! and row: on scenes of many small triangles (Sponza: 1.8 million face-rows of about
+//! 9 pixels) it costs more than the z-buffer's per-pixel work. Single-threaded.
 
+mod coherence;
 mod edge_table;
+mod faces;
 pub(crate) mod screen_faces;
 
 use std::ops::Range;
 
 use crate::Result;
-use crate::frame::Frame;
-use crate::raster::{DepthPlane, EdgeFunction, PixelRect, PolygonCoverage};
+use crate::frame::{BACKGROUND, Frame};
+use crate::raster::DepthPlane;
+use crate::raster::row_span;
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewTransform};
 
-use edge_table::{EdgeTable, ScanEdge, TableEdge, edge_rows};
-use screen_faces::{fill_run, hides, hides_over_overlap, set_pixel, stored_key, surely_nearer};
+use coherence::{Coherence, Order};
+use edge_table::{EdgeTable, ScanEdge, TableEdge, exact_pixel, tolerance};
+use faces::{DEAD, Faces, NONE, slot_hash};
+use screen_faces::{hides, hides_over_overlap, stored_key, surely_nearer};
 
 /// Renders a prepared view with the scanline algorithm.
 pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
@@ -115,6 +134,9 @@ pub enum SpanDecision {
     SingleFace,
     /// Several faces, one nearer than the others at both ends of the span.
     NearestAtEnds,
+    /// Several faces, the nearest of the previous span on the row kept: no face that
+    /// entered since could be nearer (each was compared with it once, on entering).
+    KeptNearest,
     /// Several faces, the same set as the previous row's span here: its face reused.
     Coherence,
     /// Several faces whose order changes inside the span (or near-ties): per pixel.
@@ -128,7 +150,8 @@ pub struct TracedSpan {
     pub x0: u32,
     /// One past the last pixel.
     pub x1: u32,
-    /// The face ids whose flag is *in* over the span, ascending.
+    /// The face ids whose flag is *in* over the span, ascending (without the faces
+    /// left out on entering, see `faces_hidden_on_entering`).
     pub faces: Vec<u32>,
     /// How the visible face was found.
     pub decision: SpanDecision,
@@ -146,165 +169,67 @@ pub struct RowTrace {
     pub spans: Vec<TracedSpan>,
 }
 
-const NONE: u32 = u32::MAX;
-/// `slot_of` for a polygon that covers nothing (no coverage or no depth plane).
-const DEAD: u32 = u32::MAX - 1;
-
-/// A crossing that flips a face's flag.
+/// A crossing that flips a face's flag: its pixel, and in `data` whether the face
+/// enters (lowest bit) and, above it, its place in the row's entering faces (entering)
+/// or its slot (leaving).
 #[derive(Clone, Copy, Debug)]
 struct Crossing {
     x: u32,
-    slot: u32,
-    enter: bool,
+    data: u32,
 }
 
-/// A face while its rows are being scanned.
-#[derive(Clone, Debug)]
-struct ActiveFace {
-    plane: DepthPlane,
-    rect: PixelRect,
-    /// Scene-wide face id.
-    face: u32,
-    /// Index in the view: identity and tie-break order.
-    polygon: u32,
-    /// All its edge functions (horizontal ones too), for the span check.
-    edges: Vec<EdgeFunction>,
-    /// Per vertex pair, the index of its edge function (`NONE` if zero length).
-    pair_edge: Vec<u32>,
-    /// Its screen points.
-    points: Vec<(f64, f64)>,
-    /// How many of its edges are in the active edge list.
-    edges_active: u32,
-    /// Which of its first 64 edges are active on this row.
-    active_mask: u64,
-    // This row's span, the row it was computed for, which crossings were emitted,
-    // and its place in the active set (`NONE`: flag out).
-    lo: u32,
-    hi: u32,
-    stamp: u32,
-    emitted: u8,
-    position: u32,
-}
-
-/// A span with several faces remembered for the next row.
+/// What the walk needs of a face entering the set of faces whose flag is in: its
+/// depth key along the row, `key(px) = c + dzdx (px - x0)`, the end of its span, its
+/// slot.
 #[derive(Clone, Copy, Debug)]
-struct RememberedSpan {
-    x0: u32,
-    x1: u32,
-    hash: u64,
-    count: u32,
-    /// The nearest face (a polygon index).
-    winner: u32,
-    order: Order,
-    /// Its faces (polygon indices) in the members array.
-    members: (u32, u32),
+struct Entering {
+    c: f64,
+    dzdx: f64,
+    x0: f64,
+    slot: u32,
+    end: u32,
 }
 
-/// Whether the nearest face of a set of faces is known to stay the nearest.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Order {
-    /// Not checked yet (the set was seen on one row only).
-    Unknown,
-    /// The winner hides every other face of the set wherever they overlap.
-    Fixed,
-    /// The check failed: faces of the set may swap, so it is not tried again.
-    MayChange,
+/// A face whose flag is in: its depth key along the row, `key(px) = c + dzdx (px -
+/// x0)`, and the end of its span on the row.
+#[derive(Clone, Copy, Debug)]
+struct Member {
+    c: f64,
+    dzdx: f64,
+    x0: f64,
+    end: u32,
 }
 
-/// The previous row's multi-face spans, and the current row's being recorded.
+impl Member {
+    /// The key at `px`.
+    #[inline(always)]
+    fn key(&self, px: f64) -> f64 {
+        self.c + self.dzdx * (px - self.x0)
+    }
+}
+
+/// The faces whose flag is in, in the order they entered (a face leaving is replaced
+/// by the last one): their slots, and their keys along the row in consecutive memory.
+/// `hash` is the order-independent hash of the set.
 #[derive(Debug, Default)]
-struct Coherence {
-    previous: Vec<RememberedSpan>,
-    previous_members: Vec<u32>,
-    current: Vec<RememberedSpan>,
-    current_members: Vec<u32>,
-    cursor: usize,
+struct InSet {
+    slot: Vec<u32>,
+    member: Vec<Member>,
+    hash: u64,
 }
 
-impl Coherence {
-    fn next_row(&mut self) {
-        std::mem::swap(&mut self.previous, &mut self.current);
-        std::mem::swap(&mut self.previous_members, &mut self.current_members);
-        self.current.clear();
-        self.current_members.clear();
-        self.cursor = 0;
-    }
-
-    /// The previous row's span overlapping `x0..x1` with exactly the active set (of
-    /// `count` faces; `is_active` tells whether a polygon's flag is in). Spans are
-    /// asked for left to right, so a cursor finds them in amortised O(1).
-    fn find(
-        &mut self,
-        x0: u32,
-        x1: u32,
-        hash: u64,
-        count: usize,
-        is_active: impl Fn(u32) -> bool,
-    ) -> Option<RememberedSpan> {
-        while self.cursor < self.previous.len() && self.previous[self.cursor].x1 <= x0 {
-            self.cursor += 1;
-        }
-        self.previous[self.cursor..]
-            .iter()
-            .take_while(|s| s.x0 < x1)
-            .find(|s| {
-                s.hash == hash
-                    && s.count as usize == count
-                    && self.previous_members[s.members.0 as usize..s.members.1 as usize]
-                        .iter()
-                        .all(|&m| is_active(m))
-            })
-            .copied()
-    }
-
-    fn remember(
-        &mut self,
-        span: (u32, u32),
-        hash: u64,
-        members: impl Iterator<Item = u32>,
-        winner: u32,
-        order: Order,
-    ) {
-        let a = self.current_members.len() as u32;
-        self.current_members.extend(members);
-        let b = self.current_members.len() as u32;
-        self.current.push(RememberedSpan {
-            x0: span.0,
-            x1: span.1,
-            hash,
-            count: b - a,
-            winner,
-            order,
-            members: (a, b),
-        });
-    }
-}
-
-/// Sorts a slice that is nearly sorted in time linear in its length plus the number
-/// of out-of-order pairs (stable).
-fn insertion_sort_by_key<T: Copy, K: Ord>(v: &mut [T], key: impl Fn(&T) -> K) {
-    for i in 1..v.len() {
-        let item = v[i];
-        let k = key(&item);
-        if key(&v[i - 1]) <= k {
-            continue;
-        }
-        let mut j = i;
-        while j > 0 && key(&v[j - 1]) > k {
-            v[j] = v[j - 1];
-            j -= 1;
-        }
-        v[j] = item;
-    }
-}
-
-/// A face's contribution to the order-independent hash of a set of faces.
-#[inline]
-fn face_hash(polygon: u32) -> u64 {
-    let mut z = u64::from(polygon).wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+/// The nearest face kept along a row (seed 003: the nearest face is not sought again
+/// while the list brings nothing that could change it). `valid` means the face in
+/// slot `slot` has been proven nearer, with the margin of [`surely_nearer`], than each
+/// other face in the set at every sample from where that face was compared to the end
+/// of their common span on this row: it stays the nearest until it leaves, or a face
+/// enters that it is not proven to hide.
+#[derive(Clone, Copy, Debug)]
+struct Kept {
+    slot: u32,
+    valid: bool,
+    /// Its keys along the row (a copy: it does not change while the face is in).
+    member: Member,
 }
 
 #[derive(Debug, Default)]
@@ -314,6 +239,8 @@ struct Counters {
     spans: u64,
     without_comparison: u64,
     at_ends: u64,
+    kept: u64,
+    hidden_on_entering: u64,
     by_coherence: u64,
     per_pixel: u64,
     comparisons: u64,
@@ -322,38 +249,26 @@ struct Counters {
     orders_proven: u64,
     corrections: u64,
     fallbacks: u64,
+    /// Seconds spent building the table, entering edges, sweeping, sorting crossings
+    /// and walking them.
+    seconds: [f64; 5],
 }
 
 struct Scanner<'v> {
     view: &'v PreparedView<'v>,
-    options: &'v RenderOptions,
     transform: &'v ViewTransform,
     width: u32,
-    height: u32,
     frame: Frame,
-    /// Per polygon of the view: its slot, `NONE` when not active, `DEAD` when it
-    /// covers nothing.
-    slot_of: Vec<u32>,
-    slots: Vec<ActiveFace>,
-    free_slots: Vec<u32>,
-    faces_active: usize,
-    touched: Vec<u32>,
-    /// The edges of the active edge list, at stable places (a slab with free places).
-    edge_store: Vec<ScanEdge>,
-    free_edges: Vec<u32>,
-    /// The active edge list proper: `(crossing pixel, place in edge_store)`, sorted.
-    /// Sorting these small entries instead of the edges keeps the per-row sort and
-    /// merge cheap when thousands of edges are active.
-    active_edges: Vec<(u32, u32)>,
-    incoming: Vec<(u32, u32)>,
-    merged: Vec<(u32, u32)>,
+    /// The live faces with their active edges: the active edge list, by face.
+    faces: Faces,
+    /// The crossings of this row as the faces give them, then sorted by pixel.
+    unsorted: Vec<Crossing>,
     crossings: Vec<Crossing>,
-    /// The slots whose flag is in.
-    active: Vec<u32>,
-    active_hash: u64,
-    keys_left: Vec<f64>,
-    keys_right: Vec<f64>,
-    depth_points: Vec<(f64, f64, f64)>,
+    entering: Vec<Entering>,
+    /// Per pixel column (and one past the last), the number of crossings before it.
+    bucket_starts: Vec<u32>,
+    set: InSet,
+    kept: Kept,
     coherence: Coherence,
     counters: Counters,
     trace: Option<RowTrace>,
@@ -366,30 +281,30 @@ fn run(
 ) -> Result<(Frame, Stats, Vec<RowTrace>)> {
     let vp = view.viewport();
     let frame = Frame::new(vp)?;
+    let start = std::time::Instant::now();
     let table = EdgeTable::build(view, vp.width, vp.height);
+    let table_seconds = start.elapsed().as_secs_f64();
     let mut s = Scanner {
         view,
-        options,
         transform: view.transform(),
         width: vp.width,
-        height: vp.height,
         frame,
-        slot_of: vec![NONE; view.polygon_count()],
-        slots: Vec::new(),
-        free_slots: Vec::new(),
-        faces_active: 0,
-        touched: Vec::new(),
-        edge_store: Vec::new(),
-        free_edges: Vec::new(),
-        active_edges: Vec::new(),
-        incoming: Vec::new(),
-        merged: Vec::new(),
+        faces: Faces::new(view.polygon_count(), options.fill_rule, vp.width, vp.height),
+        unsorted: Vec::new(),
         crossings: Vec::new(),
-        active: Vec::new(),
-        active_hash: 0,
-        keys_left: Vec::new(),
-        keys_right: Vec::new(),
-        depth_points: Vec::new(),
+        entering: Vec::new(),
+        bucket_starts: vec![0; vp.width as usize + 2],
+        set: InSet::default(),
+        kept: Kept {
+            slot: NONE,
+            valid: false,
+            member: Member {
+                c: 0.0,
+                dzdx: 0.0,
+                x0: 0.0,
+                end: 0,
+            },
+        },
         coherence: Coherence::default(),
         counters: Counters::default(),
         trace: None,
@@ -406,12 +321,13 @@ fn run(
                 spans: Vec::new(),
             });
         }
-        s.row(y, table.bucket(y));
+        s.row(y, &table);
         if let Some(t) = s.trace.take() {
             traces.push(t);
         }
     }
     options.report(1.0);
+    keys_to_depths(&mut s.frame, s.transform);
     let c = &s.counters;
     let mut stats = Stats::default();
     stats.set("polygons", view.polygon_count() as f64);
@@ -421,6 +337,8 @@ fn run(
     stats.set("spans", c.spans as f64);
     stats.set("spans_without_comparison", c.without_comparison as f64);
     stats.set("spans_decided_at_ends", c.at_ends as f64);
+    stats.set("spans_by_kept_nearest", c.kept as f64);
+    stats.set("faces_hidden_on_entering", c.hidden_on_entering as f64);
     stats.set("spans_by_coherence", c.by_coherence as f64);
     stats.set("spans_per_pixel", c.per_pixel as f64);
     stats.set("depth_comparisons", c.comparisons as f64);
@@ -429,325 +347,309 @@ fn run(
     stats.set("orders_proven", c.orders_proven as f64);
     stats.set("crossing_corrections", c.corrections as f64);
     stats.set("span_fallbacks", c.fallbacks as f64);
+    let ms = |s: f64| (s * 1e5).round() / 100.0;
+    stats.set("table_ms", ms(table_seconds));
+    for (name, &s) in ["enter_ms", "sweep_ms", "sort_ms", "walk_ms"]
+        .iter()
+        .zip(&c.seconds[1..])
+    {
+        stats.set(name, ms(s));
+    }
     Ok((s.frame, stats, traces))
 }
 
-impl Scanner<'_> {
-    /// One scanline: new edges, crossings, spans, then stepping the active edges to
-    /// the next row.
-    fn row(&mut self, y: u32, starting: &[TableEdge]) {
-        self.enter_edges(y, starting);
-        if self.active_edges.is_empty() && self.incoming.is_empty() {
-            self.coherence.next_row();
-            if self.trace.is_some() {
-                let span = self.traced(0, self.width, SpanDecision::Background);
-                if let Some(t) = &mut self.trace {
-                    t.spans.push(span);
-                }
-            }
-            return;
+/// Writes the face with id `face` and depth-key plane `plane` to pixels `x0..x1` of
+/// row `y`: its id, and its stored (`f32`) key stepped along the row as the seeds do,
+/// re-anchored per run, in the depth array until [`keys_to_depths`].
+#[inline]
+fn fill_keys(frame: &mut Frame, y: u32, x0: u32, x1: u32, plane: &DepthPlane, face: u32) {
+    let row = y as usize * frame.width as usize;
+    let (a, b) = (row + x0 as usize, row + x1 as usize);
+    let mut z = plane.at(f64::from(x0) + 0.5, f64::from(y) + 0.5);
+    // One scalar loop: spans are a few pixels long, where a vectorised fill costs
+    // more in set-up than it saves.
+    for (id, d) in frame.ids[a..b].iter_mut().zip(&mut frame.depth[a..b]) {
+        *id = face;
+        *d = z as f32;
+        z += plane.dzdx;
+    }
+}
+
+/// Turns the stored keys of the drawn pixels into eye-space depths, in one pass at the
+/// end rather than a division per pixel while spans are drawn.
+fn keys_to_depths(frame: &mut Frame, t: &ViewTransform) {
+    for (d, &id) in frame.depth.iter_mut().zip(&frame.ids) {
+        if id != BACKGROUND {
+            *d = t.depth_of_zq(f64::from(*d)) as f32;
         }
-        self.settle_crossings(y);
-        self.settle_spans(y);
-        self.emit_crossings();
+    }
+}
+
+impl Scanner<'_> {
+    /// One scanline: new edges, the sweep of the active edge list (crossings settled,
+    /// spans of the faces, their crossings), the crossings sorted, and the walk.
+    fn row(&mut self, y: u32, table: &EdgeTable) {
+        let t0 = std::time::Instant::now();
+        self.enter_edges(y, table);
+        let t1 = std::time::Instant::now();
+        if self.trace.is_some() {
+            self.sweep::<true>(y);
+        } else {
+            self.sweep::<false>(y);
+        }
+        let t2 = std::time::Instant::now();
+        self.sort_crossings();
+        let t3 = std::time::Instant::now();
         self.walk(y);
         self.coherence.next_row();
-        self.step_edges(y);
+        self.faces.end_row();
+        let t4 = std::time::Instant::now();
+        let s = &mut self.counters.seconds;
+        for (k, (a, b)) in [(t0, t1), (t1, t2), (t2, t3), (t3, t4)]
+            .into_iter()
+            .enumerate()
+        {
+            s[k + 1] += (b - a).as_secs_f64();
+        }
     }
 
     /// Sets up the edges of the table that start on row `y` (and their faces, when
-    /// their first edge arrives) in `incoming`.
-    fn enter_edges(&mut self, y: u32, starting: &[TableEdge]) {
-        self.incoming.clear();
-        for &TableEdge { polygon, pair } in starting {
-            let mut s = self.slot_of[polygon as usize];
+    /// their first edge arrives) and adds them to the active edge list.
+    fn enter_edges(&mut self, y: u32, table: &EdgeTable) {
+        let py = f64::from(y) + 0.5;
+        let bucket = table.bucket(y);
+        // Touch the first vertex of each polygon set up on this row first: their cache
+        // misses then overlap here instead of stalling the setups one after another.
+        let mut touched = 0.0;
+        for &TableEdge { polygon, .. } in bucket {
+            if self.faces.slot_of[polygon as usize] == NONE {
+                touched += self.view.polygon(polygon as usize).vertex(0).x;
+            }
+        }
+        std::hint::black_box(touched);
+        for &TableEdge { polygon, pair } in bucket {
+            let mut s = self.faces.slot_of[polygon as usize];
             if s == NONE {
-                s = self.activate(polygon);
+                s = self.faces.activate(self.view, polygon);
             }
             if s == DEAD {
                 continue;
             }
-            let f = &mut self.slots[s as usize];
-            let Some(&k) = f.pair_edge.get(pair as usize).filter(|&&k| k != NONE) else {
+            let Some(k) = self.faces.edges.edge_of_pair(s, pair) else {
                 continue;
             };
-            let e = f.edges[k as usize];
-            let n = f.points.len();
-            let (p, q) = (f.points[pair as usize], f.points[(pair as usize + 1) % n]);
-            let (ya, yb) = (p.1.min(q.1), p.1.max(q.1));
-            let Some((first, last)) = edge_rows(ya, yb, f.rect.y0, f.rect.y1) else {
-                continue;
-            };
-            debug_assert_eq!(first, y);
-            debug_assert_eq!(ya, e.oy);
+            let e = self.faces.edges.of(s)[k as usize];
+            let last_row = self.faces.edges.last_row(s, pair);
+            debug_assert!(e.dy > 0.0 && last_row >= y);
             let inverse_slope = e.dx / e.dy;
-            f.edges_active += 1;
-            let edge = ScanEdge {
-                edge: e,
-                index: k,
-                x: e.ox + (f64::from(y) + 0.5 - e.oy) * inverse_slope,
-                inverse_slope,
-                y_max: yb,
-                slot: s,
-                last_row: last,
-                x_lo: f.rect.x0,
-                x_hi: f.rect.x1,
-                pixel: f.rect.x0,
-                left: e.sign < 0.0,
-            };
-            let place = match self.free_edges.pop() {
-                Some(k) => {
-                    self.edge_store[k as usize] = edge;
-                    k
-                }
-                None => {
-                    self.edge_store.push(edge);
-                    (self.edge_store.len() - 1) as u32
-                }
-            };
-            self.incoming.push((0, place));
+            self.faces.add_edge(
+                s,
+                y,
+                ScanEdge {
+                    x: e.ox + (py - e.oy) * inverse_slope,
+                    inverse_slope,
+                    tolerance: tolerance(&e, inverse_slope, last_row - y + 1),
+                    last_row,
+                    index_left: ScanEdge::index_left(k, e.sign < 0.0),
+                },
+            );
         }
     }
 
-    /// Sets up a polygon whose first edge arrives: its coverage (the shared rule)
-    /// and depth plane, in a free slot. `DEAD` if it covers nothing.
-    fn activate(&mut self, polygon: u32) -> u32 {
-        let poly = self.view.polygon(polygon as usize);
-        let s = match self.free_slots.pop() {
-            Some(s) => s,
-            None => {
-                self.slots.push(ActiveFace {
-                    plane: DepthPlane {
-                        x0: 0.0,
-                        y0: 0.0,
-                        z0: 0.0,
-                        dzdx: 0.0,
-                        dzdy: 0.0,
-                    },
-                    rect: PixelRect {
-                        x0: 0,
-                        y0: 0,
-                        x1: 0,
-                        y1: 0,
-                    },
-                    face: 0,
-                    polygon: 0,
-                    edges: Vec::new(),
-                    pair_edge: Vec::new(),
-                    points: Vec::new(),
-                    edges_active: 0,
-                    active_mask: 0,
-                    lo: 0,
-                    hi: 0,
-                    stamp: NONE,
-                    emitted: 0,
-                    position: NONE,
-                });
-                (self.slots.len() - 1) as u32
-            }
-        };
-        let f = &mut self.slots[s as usize];
-        f.points.clear();
-        f.points.extend(poly.vertices().map(|v| (v.x, v.y)));
-        self.depth_points.clear();
-        self.depth_points
-            .extend(poly.vertices().map(|v| (v.x, v.y, v.zq)));
-        let coverage =
-            PolygonCoverage::new(&f.points, self.options.fill_rule, self.width, self.height);
-        let plane = DepthPlane::from_points(&self.depth_points).filter(|p| {
-            [p.x0, p.y0, p.z0, p.dzdx, p.dzdy]
-                .iter()
-                .all(|v| v.is_finite())
-        });
-        let (Some(coverage), Some(plane)) = (coverage, plane) else {
-            self.free_slots.push(s);
-            self.slot_of[polygon as usize] = DEAD;
-            return DEAD;
-        };
-        f.plane = plane;
-        f.rect = coverage.rect();
-        f.face = poly.face;
-        f.polygon = polygon;
-        f.edges.clear();
-        f.edges.extend_from_slice(coverage.edges());
-        // The coverage made one edge function per pair of distinct consecutive points.
-        f.pair_edge.clear();
-        let n = f.points.len();
-        let mut k = 0;
-        for i in 0..n {
-            if f.points[i] == f.points[(i + 1) % n] {
-                f.pair_edge.push(NONE);
-            } else {
-                f.pair_edge.push(k);
-                k += 1;
-            }
-        }
-        debug_assert_eq!(k as usize, f.edges.len());
-        f.edges_active = 0;
-        f.stamp = NONE;
-        f.emitted = 0;
-        f.position = NONE;
-        self.slot_of[polygon as usize] = s;
-        self.faces_active += 1;
-        let c = &mut self.counters;
-        c.max_active_faces = c.max_active_faces.max(self.faces_active);
-        s
-    }
-
-    /// Settles every active edge's crossing pixel and folds them into per-face
-    /// bounds: a face's span lies right of all its left edges and left of all its
-    /// right edges (and inside its sample box). Then sorts the list by crossing: the
-    /// edges already there barely change order from one row to the next (insertion
-    /// sort, linear in the number of swaps), the starting ones are sorted apart and
-    /// merged in.
-    fn settle_crossings(&mut self, y: u32) {
+    /// One pass over the live faces, in memory order. For each: its edges whose last
+    /// row was the previous one leave (the face leaves with its last edge); the others
+    /// settle their crossing pixel, fold it into the face's span (right of all its
+    /// left edges, left of all its right edges, inside its sample box) and step
+    /// `x += 1/m`; the span is made exactly the shared coverage rule's; and the face
+    /// gives its two crossings: it enters at the span's first pixel and leaves one past
+    /// its last.
+    ///
+    /// The crossings bound the covered pixels, and coverage along a row is an
+    /// interval, so a span whose first and last pixels are covered is exact. Every
+    /// edge active on the row holds both ends inside by construction (a left edge's
+    /// crossing is its first inside pixel, at or left of the span's start; a right
+    /// edge's is its first outside pixel, at or right of the span's end): only the
+    /// others need a test, and for a triangle only on the rows near its middle vertex
+    /// (see `faces::triangle_check_rows`). Where the test fails the rule decides.
+    fn sweep<const TRACE: bool>(&mut self, y: u32) {
         let py = f64::from(y) + 0.5;
-        self.touched.clear();
+        let mut traced = Vec::new();
+        self.unsorted.clear();
+        self.entering.clear();
+        let mut active_edges = 0;
         let mut corrections = 0;
-        for entry in self.active_edges.iter_mut().chain(self.incoming.iter_mut()) {
-            let e = &mut self.edge_store[entry.1 as usize];
-            corrections += e.cross(py);
-            entry.0 = e.pixel;
-            let f = &mut self.slots[e.slot as usize];
-            if f.stamp != y {
-                f.stamp = y;
-                f.lo = e.x_lo;
-                f.hi = e.x_hi;
-                f.active_mask = 0;
-                self.touched.push(e.slot);
-            }
-            if e.index < 64 {
-                f.active_mask |= 1 << e.index;
-            }
-            if e.left {
-                f.lo = f.lo.max(e.pixel);
-            } else {
-                f.hi = f.hi.min(e.pixel);
-            }
-        }
-        self.counters.corrections += corrections;
-        insertion_sort_by_key(&mut self.active_edges, |e| e.0);
-        if !self.incoming.is_empty() {
-            self.incoming.sort_unstable_by_key(|e| e.0);
-            self.merged.clear();
-            let mut a = 0;
-            for &entry in &self.incoming {
-                while a < self.active_edges.len() && self.active_edges[a].0 <= entry.0 {
-                    self.merged.push(self.active_edges[a]);
-                    a += 1;
-                }
-                self.merged.push(entry);
-            }
-            self.merged.extend_from_slice(&self.active_edges[a..]);
-            std::mem::swap(&mut self.active_edges, &mut self.merged);
-            self.incoming.clear();
-        }
-        let c = &mut self.counters;
-        c.max_active_edges = c.max_active_edges.max(self.active_edges.len());
-        if let Some(t) = &mut self.trace {
-            t.active_edges = self
-                .active_edges
-                .iter()
-                .map(|&(_, k)| &self.edge_store[k as usize])
-                .map(|e| ActiveEdge {
-                    face: self.slots[e.slot as usize].face,
-                    y_min: e.edge.oy,
-                    x: e.x,
-                    y_max: e.y_max,
-                    inverse_slope: e.inverse_slope,
-                    left: e.left,
-                    crossing: e.pixel,
-                })
-                .collect();
-        }
-    }
-
-    /// Makes each face's span exactly the shared coverage rule's. The crossings bound
-    /// the covered pixels, and coverage along a row is an interval, so a span whose
-    /// first and last pixels are covered is exact; otherwise the rule decides.
-    fn settle_spans(&mut self, y: u32) {
-        let py = f64::from(y) + 0.5;
-        for &s in &self.touched {
-            let f = &mut self.slots[s as usize];
-            let (a, b) = (f.lo, f.hi);
-            if a >= b {
+        let mut i = 0;
+        while i < self.faces.list.len() {
+            let faces = &mut self.faces;
+            let f = &mut faces.list[i];
+            f.drop_ended(y);
+            if (!f.overflow && f.count == 0) || y > f.last_row {
+                faces.retire(i);
                 continue;
             }
-            let (pa, pb) = (f64::from(a) + 0.5, f64::from(b) - 0.5);
-            // Every edge active on this row holds both ends inside by construction
-            // (a left edge's crossing is its first inside pixel, and is at or left of
-            // the span's start; a right edge's is its first outside pixel, at or
-            // right of the span's end): only the others need a test.
-            let skip = f.active_mask;
-            let exact = f.edges.iter().enumerate().all(|(k, e)| {
-                if k < 64 && skip & (1 << k) != 0 {
-                    return true;
+            i += 1;
+            let slot = f.slot;
+            let n = f.count as usize;
+            let (x0, x1) = (f.x0, f.x1);
+            let (mut lo, mut hi_not) = (x0, !x1);
+            if !f.overflow {
+                active_edges += n;
+                for e in f.edges.iter_mut().take(n) {
+                    let (pixel, off) = match ScanEdge::settled_pixel(e.x, e.tolerance) {
+                        Some(p) => (p.clamp(i64::from(x0), i64::from(x1)) as u32, 0),
+                        None => exact_pixel(
+                            &faces.edges.of(slot)[e.index() as usize],
+                            e.left(),
+                            e.x,
+                            py,
+                            x0,
+                            x1,
+                        ),
+                    };
+                    corrections += off;
+                    // Without a branch on the side (it is unpredictable): a left edge
+                    // raises `lo`, a right edge lowers `hi`, that is raises `!hi`.
+                    let left = ((e.index_left as i32) >> 31) as u32;
+                    lo = lo.max(pixel & left);
+                    hi_not = hi_not.max(!pixel & !left);
+                    if TRACE {
+                        traced.push((slot, *e, pixel));
+                    }
+                    e.x += e.inverse_slope;
                 }
-                let row = e.row_term(py);
-                e.inside_row(pa, row) && e.inside_row(pb, row)
-            });
+            }
+            let faces = &mut self.faces;
+            let f = &faces.list[i - 1];
+            let (mut lo, mut hi) = (lo, !hi_not);
+            if lo >= hi && !f.overflow {
+                continue;
+            }
+            let exact = if f.overflow {
+                false
+            } else if !(f.check_from..f.check_to).contains(&y) {
+                true
+            } else {
+                let edges = faces.edges.of(slot);
+                // The edges active on the row hold both ends by construction.
+                let mask = f.edges[..n].iter().fold(0u64, |m, e| {
+                    let k = e.index();
+                    m | u64::from(k < 64) << (k & 63)
+                });
+                let (pa, pb) = (f64::from(lo) + 0.5, f64::from(hi) - 0.5);
+                n >= edges.len()
+                    || edges.iter().enumerate().all(|(k, e)| {
+                        if k < 64 && mask & (1 << k) != 0 {
+                            return true;
+                        }
+                        let row = e.row_term(py);
+                        e.inside_row(pa, row) && e.inside_row(pb, row)
+                    })
+            };
             if !exact {
                 self.counters.fallbacks += 1;
-                let coverage = PolygonCoverage::new(
-                    &f.points,
-                    self.options.fill_rule,
-                    self.width,
-                    self.height,
-                );
-                let (a, b) = coverage.and_then(|c| c.row_span(y)).unwrap_or((a, a));
-                f.lo = a;
-                f.hi = b;
+                let rect = faces.info[slot as usize].rect;
+                let edges = faces.edges.of(slot);
+                (lo, hi) = row_span(edges, rect, y, 0, self.width).unwrap_or((lo, lo));
+                if lo >= hi {
+                    continue;
+                }
             }
+            let p = &f.plane;
+            self.unsorted.push(Crossing {
+                x: lo,
+                data: (self.entering.len() as u32) << 1 | 1,
+            });
+            self.unsorted.push(Crossing {
+                x: hi,
+                data: slot << 1,
+            });
+            self.entering.push(Entering {
+                c: p.z0 + p.dzdy * (py - p.y0),
+                dzdx: p.dzdx,
+                x0: p.x0,
+                slot,
+                end: hi,
+            });
+        }
+        self.counters.corrections += corrections;
+        let c = &mut self.counters;
+        c.max_active_edges = c.max_active_edges.max(active_edges);
+        c.max_active_faces = c.max_active_faces.max(self.faces.list.len());
+        if TRACE {
+            self.trace_edges(&traced);
         }
     }
 
-    /// The crossings in the order of the active edge list: each face enters at its
-    /// left edge and leaves at its right edge (at its exact span ends).
-    fn emit_crossings(&mut self) {
-        self.crossings.clear();
-        for &(_, k) in &self.active_edges {
-            let e = &self.edge_store[k as usize];
-            let f = &mut self.slots[e.slot as usize];
-            if f.lo >= f.hi {
-                continue;
-            }
-            let bit = if e.left { 1 } else { 2 };
-            if f.emitted & bit == 0 {
-                f.emitted |= bit;
-                self.crossings.push(Crossing {
-                    x: if e.left { f.lo } else { f.hi },
-                    slot: e.slot,
-                    enter: e.left,
-                });
+    /// Records the active edges settled on this row, as `(slot, edge, crossing pixel)`,
+    /// in the trace: the list as the seed shows it, sorted by crossing.
+    fn trace_edges(&mut self, traced: &[(u32, ScanEdge, u32)]) {
+        let faces = &self.faces;
+        let mut edges: Vec<ActiveEdge> = traced
+            .iter()
+            .map(|&(slot, e, crossing)| {
+                let info = &faces.info[slot as usize];
+                let poly = self.view.polygon(info.polygon as usize);
+                let k = e.index();
+                let pair = faces.edges.pair_of_edge(slot, k) as usize;
+                let (p, q) = (poly.vertex(pair), poly.vertex((pair + 1) % poly.len()));
+                ActiveEdge {
+                    face: info.face,
+                    y_min: faces.edges.of(slot)[k as usize].oy,
+                    x: e.x,
+                    y_max: p.y.max(q.y),
+                    inverse_slope: e.inverse_slope,
+                    left: e.left(),
+                    crossing,
+                }
+            })
+            .collect();
+        edges.sort_by_key(|e| e.crossing);
+        if let Some(t) = &mut self.trace {
+            t.active_edges = edges;
+        }
+    }
+
+    /// Sorts the row's crossings by pixel, faces leaving before faces entering at the
+    /// same pixel (an entering face is then never compared with one that has left): a
+    /// counting sort over the columns, O(crossings + width) (the seed's "sort the
+    /// intersections ascending"). The sweep gives each face's crossings as a pair
+    /// (entering, leaving), so placing every second one first puts the leaving ones
+    /// first in each column.
+    fn sort_crossings(&mut self) {
+        let starts = &mut self.bucket_starts;
+        starts.fill(0);
+        for c in &self.unsorted {
+            starts[c.x as usize + 1] += 1;
+        }
+        let mut before = 0;
+        for start in starts.iter_mut() {
+            before += *start;
+            *start = before;
+        }
+        let n = self.unsorted.len();
+        // Every one of the first `n` is written below: the array only grows, so that
+        // it is not cleared row after row.
+        if self.crossings.len() < n {
+            self.crossings.resize(n, Crossing { x: 0, data: 0 });
+        }
+        let pairs = self.unsorted.chunks_exact(2);
+        debug_assert!(pairs.remainder().is_empty());
+        for side in [1, 0] {
+            for pair in pairs.clone() {
+                let c = pair[side];
+                debug_assert_eq!(c.data & 1, 1 - side as u32);
+                let at = &mut starts[c.x as usize];
+                self.crossings[*at as usize] = c;
+                *at += 1;
             }
         }
-        // A face whose span was bounded by its sample box rather than an edge.
-        for &s in &self.touched {
-            let f = &mut self.slots[s as usize];
-            if f.lo < f.hi {
-                if f.emitted & 1 == 0 {
-                    self.crossings.push(Crossing {
-                        x: f.lo,
-                        slot: s,
-                        enter: true,
-                    });
-                }
-                if f.emitted & 2 == 0 {
-                    self.crossings.push(Crossing {
-                        x: f.hi,
-                        slot: s,
-                        enter: false,
-                    });
-                }
-            }
-            f.emitted = 0;
-        }
-        insertion_sort_by_key(&mut self.crossings, |c| c.x);
     }
 
     /// Walks the crossings left to right, flipping flags and deciding each span.
     fn walk(&mut self, y: u32) {
-        let crossings = std::mem::take(&mut self.crossings);
+        let all = std::mem::take(&mut self.crossings);
+        let crossings = &all[..self.unsorted.len()];
+        self.kept.valid = false;
         let mut x = 0;
         let mut i = 0;
         while i < crossings.len() {
@@ -757,72 +659,94 @@ impl Scanner<'_> {
                 x = cx;
             }
             while i < crossings.len() && crossings[i].x == cx {
-                let c = crossings[i];
-                self.flip(c.slot, c.enter);
+                let d = crossings[i].data;
+                if d & 1 != 0 {
+                    self.enter((d >> 1) as usize, cx);
+                } else {
+                    self.leave(d >> 1);
+                }
                 i += 1;
             }
         }
-        debug_assert!(self.active.is_empty(), "every face leaves on its row");
+        debug_assert!(self.set.slot.is_empty(), "every face leaves on its row");
         if x < self.width {
             self.span(y, x, self.width);
         }
-        self.crossings = crossings;
+        self.crossings = all;
     }
 
-    /// Steps the active edges to the next row, dropping finished ones and freeing
-    /// faces whose last edge left.
-    fn step_edges(&mut self, y: u32) {
-        let slots = &mut self.slots;
-        let free = &mut self.free_slots;
-        let slot_of = &mut self.slot_of;
-        let store = &mut self.edge_store;
-        let free_edges = &mut self.free_edges;
-        let mut ended = 0;
-        self.active_edges.retain(|&(_, k)| {
-            let e = &mut store[k as usize];
-            if e.last_row == y {
-                free_edges.push(k);
-                let f = &mut slots[e.slot as usize];
-                f.edges_active -= 1;
-                if f.edges_active == 0 {
-                    slot_of[f.polygon as usize] = NONE;
-                    free.push(e.slot);
-                    ended += 1;
-                }
-                false
-            } else {
-                e.x += e.inverse_slope;
-                true
+    /// Entering face `k` of the row enters at pixel `x`: its flag is in. The kept
+    /// nearest face stays valid if it is nearer at the first and last samples the two
+    /// share. If that is the entering face's whole span on the row, the entering face
+    /// cannot be seen anywhere on it (the kept face is in and nearer at each of its
+    /// pixels, whatever else enters), so it is left out of the set of faces in: spans
+    /// are then decided among fewer faces, often one.
+    #[inline]
+    fn enter(&mut self, k: usize, x: u32) {
+        let e = self.entering[k];
+        let m = Member {
+            c: e.c,
+            dzdx: e.dzdx,
+            x0: e.x0,
+            end: e.end,
+        };
+        if self.kept.valid {
+            let w = self.kept.member;
+            let last = w.end.min(e.end);
+            let (a, b) = (f64::from(x) + 0.5, f64::from(last) - 0.5);
+            let hides_at_a = last > x && surely_nearer(w.key(a), m.key(a));
+            let hides = hides_at_a && surely_nearer(w.key(b), m.key(b));
+            self.counters.comparisons += 1 + u64::from(hides_at_a);
+            self.kept.valid = hides;
+            if hides && e.end <= w.end {
+                self.counters.hidden_on_entering += 1;
+                return;
             }
-        });
-        self.faces_active -= ended;
+        }
+        let set = &mut self.set;
+        set.hash ^= slot_hash(e.slot);
+        self.faces.position[e.slot as usize] = set.slot.len() as u32;
+        set.slot.push(e.slot);
+        set.member.push(m);
     }
 
-    fn flip(&mut self, s: u32, enter: bool) {
-        let f = &mut self.slots[s as usize];
-        self.active_hash ^= face_hash(f.polygon);
-        if enter {
-            f.position = self.active.len() as u32;
-            self.active.push(s);
-        } else {
-            let p = f.position as usize;
-            f.position = NONE;
-            self.active.swap_remove(p);
-            if let Some(&moved) = self.active.get(p) {
-                self.slots[moved as usize].position = p as u32;
-            }
+    /// The face in slot `s` leaves: its flag is out (nothing to do if it was left out
+    /// on entering).
+    #[inline]
+    fn leave(&mut self, s: u32) {
+        let i = self.faces.position[s as usize];
+        if i == NONE {
+            return;
+        }
+        let i = i as usize;
+        let set = &mut self.set;
+        set.hash ^= slot_hash(s);
+        self.faces.position[s as usize] = NONE;
+        set.slot.swap_remove(i);
+        set.member.swap_remove(i);
+        if let Some(&moved) = set.slot.get(i) {
+            self.faces.position[moved as usize] = i as u32;
+        }
+        if s == self.kept.slot {
+            self.kept.valid = false;
         }
     }
 
     /// Draws the span `x0..x1` of row `y` from the faces whose flag is in.
     fn span(&mut self, y: u32, x0: u32, x1: u32) {
-        let decision = match self.active.len() {
+        let decision = match self.set.slot.len() {
             0 => SpanDecision::Background,
             1 => {
                 self.counters.spans += 1;
                 self.counters.without_comparison += 1;
-                let f = &self.slots[self.active[0] as usize];
-                fill_run(&mut self.frame, self.transform, y, x0, x1, &f.plane, f.face);
+                let s = self.set.slot[0];
+                self.fill(y, x0, x1, s);
+                // Alone, it is the nearest until another face enters.
+                self.kept = Kept {
+                    slot: s,
+                    valid: true,
+                    member: self.set.member[0],
+                };
                 SpanDecision::SingleFace
             }
             _ => {
@@ -838,11 +762,19 @@ impl Scanner<'_> {
         }
     }
 
+    /// Draws pixels `x0..x1` of row `y` with the face in slot `s`.
+    #[inline]
+    fn fill(&mut self, y: u32, x0: u32, x1: u32, s: u32) {
+        let f = &self.faces.info[s as usize];
+        fill_keys(&mut self.frame, y, x0, x1, &f.plane, f.face);
+    }
+
     fn traced(&self, x0: u32, x1: u32, decision: SpanDecision) -> TracedSpan {
         let mut faces: Vec<u32> = self
-            .active
+            .set
+            .slot
             .iter()
-            .map(|&s| self.slots[s as usize].face)
+            .map(|&s| self.faces.info[s as usize].face)
             .collect();
         faces.sort_unstable();
         TracedSpan {
@@ -853,68 +785,45 @@ impl Scanner<'_> {
         }
     }
 
-    /// Decides and draws a span with several faces.
+    /// Decides and draws a span with several faces: by the nearest face kept along the
+    /// row, else by coherence with the previous row, else by comparing the keys at the
+    /// span's ends
+    /// (and, to keep the winner along the row, at the end of each face's common span
+    /// with it), else pixel by pixel.
     fn nearest(&mut self, y: u32, x0: u32, x1: u32) -> SpanDecision {
-        let k = self.active.len();
-        let hash = self.active_hash;
-        let (slots, slot_of) = (&self.slots, &self.slot_of);
-        let seen = self.coherence.find(x0, x1, hash, k, |p| {
-            let s = slot_of[p as usize];
-            s < DEAD && slots[s as usize].position != NONE
-        });
+        if self.kept.valid {
+            self.counters.kept += 1;
+            self.fill(y, x0, x1, self.kept.slot);
+            return SpanDecision::KeptNearest;
+        }
+        let k = self.set.slot.len();
+        let hash = self.set.hash;
+        let seen = self.coherence.find(x0, x1, hash, k, &self.faces.position);
         let k = k as u64;
         if let Some(s) = seen.filter(|s| s.order == Order::Fixed) {
             self.counters.by_coherence += 1;
             self.counters.skipped += 3 * (k - 1);
-            let f = &self.slots[self.slot_of[s.winner as usize] as usize];
-            fill_run(&mut self.frame, self.transform, y, x0, x1, &f.plane, f.face);
-            let members = self.active.iter().map(|&a| self.slots[a as usize].polygon);
+            self.fill(y, x0, x1, s.winner);
             self.coherence
-                .remember((x0, x1), hash, members, s.winner, Order::Fixed);
+                .remember((x0, x1), hash, &self.set.slot, s.winner, Order::Fixed);
+            // It hides every face of the set wherever they overlap: the nearest along
+            // the row too.
+            self.kept = Kept {
+                slot: s.winner,
+                valid: true,
+                member: self.set.member[self.faces.position[s.winner as usize] as usize],
+            };
             return SpanDecision::Coherence;
         }
 
-        // The planes at both end samples; the nearest at the left end must beat each
-        // other face at both ends.
-        let py = f64::from(y) + 0.5;
-        let (pl, pr) = (f64::from(x0) + 0.5, f64::from(x1) - 0.5);
-        self.keys_left.clear();
-        self.keys_right.clear();
-        for &s in &self.active {
-            let p = &self.slots[s as usize].plane;
-            self.keys_left.push(p.at(pl, py));
-            self.keys_right.push(p.at(pr, py));
-        }
-        let mut w = 0;
-        for g in 1..self.active.len() {
-            if self.keys_left[g] > self.keys_left[w] {
-                w = g;
-            }
-        }
-        self.counters.comparisons += k - 1;
-        let mut nearer_all_along = true;
-        for g in 0..self.active.len() {
-            if g != w {
-                self.counters.comparisons += 2;
-                if !(surely_nearer(self.keys_left[w], self.keys_left[g])
-                    && surely_nearer(self.keys_right[w], self.keys_right[g]))
-                {
-                    nearer_all_along = false;
-                    break;
-                }
-            }
-        }
-        if nearer_all_along {
+        if let Some(ws) = self.nearest_at_ends(x0, x1) {
             self.counters.at_ends += 1;
-            let ws = self.active[w];
-            let f = &self.slots[ws as usize];
-            let winner = f.polygon;
-            fill_run(&mut self.frame, self.transform, y, x0, x1, &f.plane, f.face);
+            self.fill(y, x0, x1, ws);
             // The same set on the previous row: check once whether the order can
             // change anywhere, so that later rows may skip the comparisons.
             let order = match seen {
                 None => Order::Unknown,
-                Some(s) if s.order == Order::Unknown && s.winner == winner => {
+                Some(s) if s.order == Order::Unknown && s.winner == ws => {
                     if self.order_is_fixed(ws) {
                         Order::Fixed
                     } else {
@@ -923,19 +832,20 @@ impl Scanner<'_> {
                 }
                 Some(_) => Order::MayChange,
             };
-            let members = self.active.iter().map(|&a| self.slots[a as usize].polygon);
             self.coherence
-                .remember((x0, x1), hash, members, winner, order);
+                .remember((x0, x1), hash, &self.set.slot, ws, order);
             return SpanDecision::NearestAtEnds;
         }
 
         self.counters.per_pixel += 1;
+        let py = f64::from(y) + 0.5;
+        let info = &self.faces.info;
         for x in x0..x1 {
             let px = f64::from(x) + 0.5;
-            let first = &self.slots[self.active[0] as usize];
+            let first = &info[self.set.slot[0] as usize];
             let (mut best, mut best_key) = (first, stored_key(&first.plane, px, py));
-            for &g in &self.active[1..] {
-                let f = &self.slots[g as usize];
+            for &g in &self.set.slot[1..] {
+                let f = &info[g as usize];
                 let kg = stored_key(&f.plane, px, py);
                 if hides(kg, f.polygon, best_key, best.polygon) {
                     best = f;
@@ -943,20 +853,75 @@ impl Scanner<'_> {
                 }
             }
             self.counters.comparisons += k - 1;
-            let face = best.face;
-            set_pixel(&mut self.frame, self.transform, x, y, face, best_key);
+            let k = self.frame.index(x, y);
+            self.frame.ids[k] = best.face;
+            self.frame.depth[k] = best_key;
         }
         SpanDecision::PerPixel
     }
 
-    /// Whether the face in slot `winner` hides every other active face wherever both
-    /// can be seen.
+    /// The face nearest at the span's left end, if it is nearer than each other face
+    /// (with the margin of [`surely_nearer`]) at both ends of the span `x0..x1`: the
+    /// difference of two keys is affine, so it is then nearer all along. When it is
+    /// also nearer at the last sample each face shares with it on the row, it is kept
+    /// as the nearest for the next spans.
+    fn nearest_at_ends(&mut self, x0: u32, x1: u32) -> Option<u32> {
+        let members = &self.set.member[..];
+        let (pl, pr) = (f64::from(x0) + 0.5, f64::from(x1) - 0.5);
+        // The first face with the largest key at the left end (NaN never wins).
+        let (mut w, mut best) = (usize::MAX, f64::NEG_INFINITY);
+        for (g, m) in members.iter().enumerate() {
+            let kg = m.key(pl);
+            if kg > best {
+                (w, best) = (g, kg);
+            }
+        }
+        let mw = *members.get(w)?;
+        // Comparisons are counted locally and added once (also when giving up).
+        let mut comparisons = members.len() as u64 - 1;
+        let mut kept = true;
+        let mut proven = true;
+        for (g, m) in members.iter().enumerate() {
+            if g == w {
+                continue;
+            }
+            comparisons += 1;
+            if !surely_nearer(best, m.key(pl)) {
+                proven = false;
+                break;
+            }
+            let b = f64::from(mw.end.min(m.end)) - 0.5;
+            comparisons += 1;
+            if !surely_nearer(mw.key(b), m.key(b)) {
+                kept = false;
+                comparisons += 1;
+                if !surely_nearer(mw.key(pr), m.key(pr)) {
+                    proven = false;
+                    break;
+                }
+            }
+        }
+        self.counters.comparisons += comparisons;
+        if !proven {
+            return None;
+        }
+        let ws = self.set.slot[w];
+        self.kept = Kept {
+            slot: ws,
+            valid: kept,
+            member: mw,
+        };
+        Some(ws)
+    }
+
+    /// Whether the face in slot `winner` hides every other face in the set wherever
+    /// both can be seen.
     fn order_is_fixed(&mut self, winner: u32) -> bool {
         self.counters.order_checks += 1;
-        let w = &self.slots[winner as usize];
-        for &g in &self.active {
+        let w = &self.faces.info[winner as usize];
+        for &g in &self.set.slot {
             if g != winner {
-                let f = &self.slots[g as usize];
+                let f = &self.faces.info[g as usize];
                 let (ok, n) = hides_over_overlap(&w.plane, w.rect, &f.plane, f.rect);
                 self.counters.comparisons += n;
                 if !ok {

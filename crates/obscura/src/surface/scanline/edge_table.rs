@@ -15,58 +15,126 @@
 //! when the polygon's first edge enters. Memory therefore follows the active faces,
 //! not the scene.
 
-use crate::raster::{EdgeFunction, sample_rect};
-use crate::view::PreparedView;
+use crate::raster::EdgeFunction;
+#[cfg(doc)]
+use crate::raster::sample_rect;
+use crate::view::{PreparedView, ViewPolygon};
 
-/// One entry of the active edge list.
+/// One entry of the active edge list: the seed's `(x_min, 1/m, y_max)`, the bound
+/// that lets `x` alone settle the crossing pixel, and which of its face's edges it is
+/// (32 bytes; its face is the [`super::faces::ScanFace`] holding it). Its edge function
+/// is its face's, read only when the crossing is too near a pixel centre.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ScanEdge {
-    /// The canonical edge function (the shared coverage rule).
-    pub edge: EdgeFunction,
-    /// Where it crosses the current row's sample line.
+    /// Where it crosses the current row's sample line (stepped by `1/m` per row).
     pub x: f64,
     /// `dx/dy`, the seed's `1/m`.
     pub inverse_slope: f64,
-    /// Bottom end (the top end is the edge function's origin).
-    pub y_max: f64,
-    /// The slot of its face among the active faces.
-    pub slot: u32,
-    /// Its index among its face's edge functions.
-    pub index: u32,
+    /// The [`tolerance`] of the edge: how far `x` may be from the exact crossing, plus
+    /// how near a pixel centre the shared edge test may round the wrong way, over
+    /// every row of the edge. Infinite when no bound is known.
+    pub tolerance: f64,
     /// The last row it is active on.
     pub last_row: u32,
-    /// The face's sample box columns: crossings are clamped to `x_lo..=x_hi`.
-    pub x_lo: u32,
-    /// One past the last column of the face's sample box.
-    pub x_hi: u32,
-    /// The crossing pixel of the current row: for a left edge the first pixel inside
-    /// it, for a right edge the first pixel past it (`x_hi` when none).
-    pub pixel: u32,
-    /// Whether the face lies to the right of it (its crossing opens the face's span);
-    /// otherwise the crossing closes it.
-    pub left: bool,
+    /// Its index among its face's edge functions; the top bit tells a left edge.
+    pub index_left: u32,
 }
 
+const LEFT: u32 = 1 << 31;
+
 impl ScanEdge {
-    /// Settles the crossing pixel of row `py` (sample line), starting from the
-    /// incremental `x` and correcting it with the edge function. Returns how many
-    /// pixels the incremental guess was off.
+    /// A placeholder.
+    pub const NONE: ScanEdge = ScanEdge {
+        x: 0.0,
+        inverse_slope: 0.0,
+        tolerance: f64::INFINITY,
+        last_row: 0,
+        index_left: 0,
+    };
+
+    /// Packs an edge's index and side.
     #[inline]
-    pub fn cross(&mut self, py: f64) -> u64 {
-        let e = &self.edge;
-        let row = e.row_term(py);
-        let (lo, hi) = (i64::from(self.x_lo), i64::from(self.x_hi));
-        // The first pixel whose centre is at or right of x.
-        let guess = ceil_within(self.x - 0.5, lo, hi);
-        let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
-        let found = if self.left {
-            first_true(lo, hi, guess, inside)
-        } else {
-            first_true(lo, hi, guess, |i| !inside(i))
-        };
-        self.pixel = found as u32;
-        found.abs_diff(guess)
+    pub fn index_left(index: u32, left: bool) -> u32 {
+        debug_assert!(index < LEFT);
+        index | if left { LEFT } else { 0 }
     }
+
+    /// Whether the face lies to the right of it (its crossing opens the face's span).
+    #[inline(always)]
+    pub fn left(&self) -> bool {
+        self.index_left & LEFT != 0
+    }
+
+    /// Its index among its face's edge functions.
+    #[inline(always)]
+    pub fn index(&self) -> u32 {
+        self.index_left & !LEFT
+    }
+
+    /// The crossing pixel (not clamped) when `x` settles it: the first pixel whose
+    /// centre lies right of `x`, `floor(x - 0.5) + 1`, if every centre is farther
+    /// from `x` than `tolerance`. The shared edge test is then known to switch exactly
+    /// there: it is monotonic along the row and agrees with the exact sign at the two
+    /// centres around the crossing. `None` sends the edge to [`exact_pixel`].
+    ///
+    /// `v = x - 0.5` is rounded to the nearest integer `r` by adding and subtracting
+    /// `1.5 * 2^52` (exact for `|v| < 2^30`, which is checked), and the low bits of
+    /// the sum are `r` itself; `v - r` is then exact, so the distance to the nearest
+    /// centre is compared without rounding. NaN fails every test.
+    #[inline(always)]
+    pub fn settled_pixel(x: f64, tolerance: f64) -> Option<i64> {
+        const ROUND: f64 = 6_755_399_441_055_744.0;
+        let v = x - 0.5;
+        let sum = v + ROUND;
+        let d = v - (sum - ROUND);
+        let r = i64::from(sum.to_bits() as u32 as i32);
+        (v.abs() < 1_073_741_824.0 && d.abs() > tolerance).then_some(r + i64::from(d > 0.0))
+    }
+}
+
+/// The crossing pixel of a left (`left`) or right edge with shared edge function `e`
+/// on the row with sample line `py`, within columns `lo..=hi`, found from the
+/// incremental guess `x` by the edge test itself. Returns it and how many pixels the
+/// guess was off.
+#[inline(never)]
+pub(crate) fn exact_pixel(
+    e: &EdgeFunction,
+    left: bool,
+    x: f64,
+    py: f64,
+    lo: u32,
+    hi: u32,
+) -> (u32, u64) {
+    let row = e.row_term(py);
+    let (lo, hi) = (i64::from(lo), i64::from(hi));
+    // The first pixel whose centre is at or right of x.
+    let guess = ceil_within(x - 0.5, lo, hi);
+    let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
+    let found = if left {
+        first_true(lo, hi, guess, inside)
+    } else {
+        first_true(lo, hi, guess, |i| !inside(i))
+    };
+    (found as u32, found.abs_diff(guess))
+}
+
+/// A bound, in pixels, on the error of an incrementally stepped crossing `x` of edge
+/// `e` with inverse slope `s` over `rows` rows, plus the distance from the exact
+/// crossing within which the shared edge test may round to the wrong side. With `u`
+/// the unit roundoff: the first `x = ox + (py - oy) s` is within `u (|ox| + 4 |py - oy|
+/// |s|)`; each of the `rows` steps adds at most `u (|x| + |s|)` (the rounding of the
+/// sum and of `s`); the edge test `dx (py - oy) - dy (px - ox)` is off by at most
+/// `2u (|dx| |py - oy| + |dy| |px - ox|)`, which is `2u (|s| |py - oy| + |px - ox|)`
+/// in pixels. The sum is taken with `|py - oy| <= |dy| + 2`, `|x|, |px - ox| <= the
+/// edge's extent + 2`, doubled twice for safety; infinite if not finite or not small.
+pub(crate) fn tolerance(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
+    let u = f64::EPSILON; // twice the unit roundoff
+    let x_extent = e.ox.abs().max((e.ox + e.dx).abs()) + e.dx.abs() + 2.0;
+    let y_extent = e.dy.abs() + 2.0;
+    let s = s.abs();
+    let bound =
+        4.0 * u * (x_extent + 8.0 * y_extent * s + (f64::from(rows) + 4.0) * (s + x_extent) + 4.0);
+    if bound < 0.25 { bound } else { f64::INFINITY }
 }
 
 /// `ceil(v)` clamped to `lo..=hi` (`lo >= 0`; `lo` for NaN), without a call to the
@@ -86,25 +154,37 @@ fn ceil_within(v: f64, lo: i64, hi: i64) -> i64 {
 
 /// Above this every `f64` is an integer.
 const ALL_INTEGERS: f64 = 4_503_599_627_370_496.0;
+/// Below this (in magnitude) adding and subtracting [`ROUND_TO_INTEGER`] rounds to the
+/// nearest integer.
+const ROUNDS_EXACTLY: f64 = 2_251_799_813_685_248.0;
+/// `1.5 * 2^52`: a sum with it has no fraction bits left.
+const ROUND_TO_INTEGER: f64 = 6_755_399_441_055_744.0;
 
-/// `v.ceil()` by truncation (no C library call on targets without a rounding
-/// instruction); NaN stays NaN.
+/// `v` rounded to an integer, the nearest one for `|v| < 2^51` (no C library call
+/// on targets without a rounding instruction); else by truncation, or `v` itself
+/// from `2^52` on (every such `f64` is an integer) and for NaN.
 #[inline(always)]
-fn round_up(v: f64) -> f64 {
-    if !(v.abs() < ALL_INTEGERS) {
-        return v;
+fn round_near(v: f64) -> f64 {
+    if v.abs() < ROUNDS_EXACTLY {
+        (v + ROUND_TO_INTEGER) - ROUND_TO_INTEGER
+    } else if v.abs() < ALL_INTEGERS {
+        v as i64 as f64
+    } else {
+        v
     }
-    let t = v as i64 as f64;
+}
+
+/// `v.ceil()` without a C library call; NaN stays NaN.
+#[inline(always)]
+pub(crate) fn round_up(v: f64) -> f64 {
+    let t = round_near(v);
     if t < v { t + 1.0 } else { t }
 }
 
-/// `v.floor()` by truncation; NaN stays NaN.
+/// `v.floor()` without a C library call; NaN stays NaN.
 #[inline(always)]
-fn round_down(v: f64) -> f64 {
-    if !(v.abs() < ALL_INTEGERS) {
-        return v;
-    }
-    let t = v as i64 as f64;
+pub(crate) fn round_down(v: f64) -> f64 {
+    let t = round_near(v);
     if t > v { t - 1.0 } else { t }
 }
 
@@ -150,64 +230,96 @@ pub(crate) fn edge_rows(ya: f64, yb: f64, y0: u32, y1: u32) -> Option<(u32, u32)
     (first <= last).then_some((first as u32, last as u32))
 }
 
+/// [`sample_rect`]'s pixel range of `[lo, hi]` on an axis of `n` pixels, with its
+/// rounding done by truncation (no C library call where the target has no rounding
+/// instruction): `ceil(lo - 0.5)` to `floor(hi - 0.5) + 1`, clamped to `0..=n`.
+#[inline(always)]
+pub(crate) fn sample_range(lo: f64, hi: f64, n: u32) -> (u32, u32) {
+    let n = f64::from(n);
+    let a = round_up(lo - 0.5).max(0.0).min(n);
+    let b = (round_down(hi - 0.5) + 1.0).max(0.0).min(n);
+    (a as u32, b as u32)
+}
+
+/// The rows of a polygon's sample box (as [`sample_rect`] has them; `None` when the
+/// box holds no sample).
+#[inline]
+fn box_rows(poly: &ViewPolygon<'_>, width: u32, height: u32) -> Option<(u32, u32)> {
+    let (mut minx, mut miny) = (f64::INFINITY, f64::INFINITY);
+    let (mut maxx, mut maxy) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+    for v in poly.vertices() {
+        minx = minx.min(v.x);
+        maxx = maxx.max(v.x);
+        miny = miny.min(v.y);
+        maxy = maxy.max(v.y);
+    }
+    if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
+        return None;
+    }
+    let (x0, x1) = sample_range(minx, maxx, width);
+    let (y0, y1) = sample_range(miny, maxy, height);
+    (x0 < x1 && y0 < y1).then_some((y0, y1))
+}
+
+/// Calls `f(pair, first)` for each edge of a polygon with box rows `y0..y1` that is
+/// active on some row, `first` being its first row.
+#[inline]
+fn for_each_edge(poly: &ViewPolygon<'_>, (y0, y1): (u32, u32), mut f: impl FnMut(u32, u32)) {
+    let n = poly.len();
+    for pair in 0..n {
+        let (p, q) = (poly.vertex(pair), poly.vertex((pair + 1) % n));
+        if p.y == q.y {
+            continue;
+        }
+        if let Some((first, _)) = edge_rows(p.y.min(q.y), p.y.max(q.y), y0, y1) {
+            f(pair as u32, first);
+        }
+    }
+}
+
 impl EdgeTable {
     /// The table of every non-horizontal edge of the view's polygons that meets a
-    /// sample line of a `width x height` image within its polygon's sample box.
+    /// sample line of a `width x height` image within its polygon's sample box: one
+    /// pass over the polygons (their vertices are read once, in memory order), then a
+    /// counting sort by first row.
     pub fn build(view: &PreparedView<'_>, width: u32, height: u32) -> Self {
-        let mut rows: Vec<u32> = Vec::with_capacity(view.polygon_count() * 3);
-        let mut edges: Vec<TableEdge> = Vec::with_capacity(view.polygon_count() * 3);
+        let mut placed: Vec<(u32, TableEdge)> = Vec::with_capacity(view.polygon_count() * 3);
         for (k, poly) in view.polygons().enumerate() {
-            let (mut minx, mut miny) = (f64::INFINITY, f64::INFINITY);
-            let (mut maxx, mut maxy) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-            for v in poly.vertices() {
-                minx = minx.min(v.x);
-                maxx = maxx.max(v.x);
-                miny = miny.min(v.y);
-                maxy = maxy.max(v.y);
-            }
             // The box the coverage rule will use; no box, no coverage.
-            let Some(rect) = sample_rect(minx, miny, maxx, maxy, width, height) else {
-                continue;
-            };
-            let n = poly.len();
-            for pair in 0..n {
-                let (p, q) = (poly.vertex(pair), poly.vertex((pair + 1) % n));
-                if p.y == q.y {
-                    continue;
-                }
-                if let Some((first, _)) = edge_rows(p.y.min(q.y), p.y.max(q.y), rect.y0, rect.y1) {
-                    rows.push(first);
-                    edges.push(TableEdge {
-                        polygon: k as u32,
-                        pair: pair as u32,
-                    });
-                }
+            if let Some(rows) = box_rows(&poly, width, height) {
+                for_each_edge(&poly, rows, |pair, first| {
+                    placed.push((
+                        first,
+                        TableEdge {
+                            polygon: k as u32,
+                            pair,
+                        },
+                    ));
+                });
             }
         }
         // Bucket by first row with a counting sort (stable: polygon order in a bucket).
         let mut starts = vec![0u32; height as usize + 1];
-        for &row in &rows {
+        for &(row, _) in &placed {
             starts[row as usize + 1] += 1;
         }
         for r in 0..height as usize {
             starts[r + 1] += starts[r];
         }
         let mut next = starts.clone();
-        let mut sorted = vec![
+        let mut edges = vec![
             TableEdge {
                 polygon: 0,
                 pair: 0
             };
-            edges.len()
+            placed.len()
         ];
-        for (&row, &e) in rows.iter().zip(&edges) {
-            sorted[next[row as usize] as usize] = e;
-            next[row as usize] += 1;
+        for &(row, e) in &placed {
+            let at = &mut next[row as usize];
+            edges[*at as usize] = e;
+            *at += 1;
         }
-        EdgeTable {
-            starts,
-            edges: sorted,
-        }
+        EdgeTable { starts, edges }
     }
 
     /// Number of edges.
@@ -267,13 +379,43 @@ mod tests {
             -7.999_999_999,
             1e15 + 0.5,
             -1e15 - 0.5,
+            2_251_799_813_685_247.5,
+            -2_251_799_813_685_247.5,
+            3e15 + 0.5,
+            -3e15 - 0.5,
+            4_503_599_627_370_495.5,
             1e20,
             -1e20,
+            0.49999999999999994,
+            -0.49999999999999994,
+            1.5,
+            -1.5,
+            1e300,
         ] {
             assert_eq!(round_up(v), v.ceil(), "{v}");
             assert_eq!(round_down(v), v.floor(), "{v}");
         }
         assert!(round_up(f64::NAN).is_nan() && round_down(f64::INFINITY).is_infinite());
+    }
+
+    #[test]
+    fn settled_pixel_is_the_first_centre_right_of_x_when_far_from_centres() {
+        let t = 1e-6;
+        let mut xs = vec![f64::NAN, f64::INFINITY, -f64::INFINITY, 1e12, -1e12, 3e9];
+        for k in -40..400 {
+            let c = f64::from(k) * 0.25;
+            xs.extend([c, c + 1e-7, c - 1e-7, c + 2e-6, c - 2e-6, c + 0.1, c + 0.37]);
+        }
+        for x in xs {
+            let v = x - 0.5;
+            // Independent expectation: the library floor and the distance to the
+            // nearest centre.
+            let far = (v - v.round()).abs() > t && v.abs() < 1e9;
+            let expected = far.then(|| (v.floor() + 1.0) as i64);
+            assert_eq!(ScanEdge::settled_pixel(x, t), expected, "{x}");
+        }
+        // An unknown bound settles nothing.
+        assert_eq!(ScanEdge::settled_pixel(3.2, f64::INFINITY), None);
     }
 
     #[test]
@@ -283,32 +425,5 @@ mod tests {
                 assert_eq!(first_true(0, 10, guess, |i| i >= switch), switch.min(10));
             }
         }
-    }
-
-    #[test]
-    fn crossing_is_corrected_from_a_bad_guess() {
-        use crate::raster::FillRule;
-        // A left edge from (2.2, 0) to (6.2, 8): at row 3 (y = 3.5) it is at x = 3.95,
-        // so the first pixel inside is 4 (centre 4.5 > 3.95 > 3.5).
-        let e = EdgeFunction::new((2.2, 0.0), (6.2, 8.0), -1.0, FillRule::TopLeft).unwrap();
-        let mut s = ScanEdge {
-            edge: e,
-            slot: 0,
-            index: 0,
-            left: e.sign < 0.0,
-            y_max: 8.0,
-            x: 0.0, // deliberately wrong
-            inverse_slope: 0.5,
-            last_row: 7,
-            x_lo: 0,
-            x_hi: 16,
-            pixel: 0,
-        };
-        assert!(s.left);
-        let off = s.cross(3.5);
-        assert_eq!(s.pixel, 4);
-        assert_eq!(off, 4);
-        s.x = 3.95;
-        assert_eq!(s.cross(3.5), 0);
     }
 }
