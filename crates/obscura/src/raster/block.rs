@@ -6,8 +6,8 @@
 //!   rows, the whole image) and rows of the buffer described in [`super::lanes`].
 //! - Output: the buffer with the polygon's covered pixels depth-tested; counts of the
 //!   pixels tested and taken.
-//! - Coverage: exactly the shared rule of [`PolygonCoverage::covers`]
-//!   (super::PolygonCoverage::covers). Edge `e` with canonical origin `(ox, oy)`,
+//! - Coverage: exactly the shared rule of
+//!   [`PolygonCoverage::covers`](super::PolygonCoverage::covers). Edge `e` with canonical origin `(ox, oy)`,
 //!   direction `(dx, dy)` and orientation `sign` is stored as `sdx = sign dx`,
 //!   `sdy = sign dy`; per sample the rasterizer computes
 //!   `t = sdy (px - ox) - sdx (py - oy)`, which is `-sign (dx (py - oy) - dy (px - ox))`
