@@ -33,26 +33,16 @@ const BYTES_PER_PIXEL: u64 = 4 + 4 + 3;
 impl Frame {
     /// A frame of background, or an error if it would not fit in memory.
     pub fn new(viewport: Viewport) -> Result<Self> {
-        let n = viewport.pixel_count();
-        let refuse = |reason: String| Error::InvalidViewport {
-            width: u64::from(viewport.width),
-            height: u64::from(viewport.height),
-            reason,
-        };
-        check_fits(viewport, available_memory()).map_err(refuse)?;
         // Huge pages: a 1080p frame in 4 KiB pages costs thousands of page faults.
-        let mut ids = crate::memory::vec_with_capacity(n)
-            .map_err(|_| refuse(format!("cannot allocate {} MiB for ids", (n * 4) >> 20)))?;
-        let mut depth = crate::memory::vec_with_capacity(n)
-            .map_err(|_| refuse(format!("cannot allocate {} MiB for depths", (n * 4) >> 20)))?;
-        ids.resize(n, BACKGROUND);
-        depth.resize(n, f32::INFINITY);
-        Ok(Frame {
-            width: viewport.width,
-            height: viewport.height,
-            ids,
-            depth,
-        })
+        let mut frame = Self::allocate(
+            viewport,
+            |n| crate::memory::vec_with_capacity(n).ok(),
+            |n| crate::memory::vec_with_capacity(n).ok(),
+        )?;
+        let n = viewport.pixel_count();
+        frame.ids.resize(n, BACKGROUND);
+        frame.depth.resize(n, f32::INFINITY);
+        Ok(frame)
     }
 
     /// A frame of zero bits (ids 0, depths 0.0), or an error if it would not fit in
@@ -60,6 +50,20 @@ impl Frame {
     /// comes zeroed from the system, in huge pages where it has them, and nothing is
     /// written here: each page is first touched where the renderer first writes it.
     pub(crate) fn zeroed(viewport: Viewport) -> Result<Self> {
+        Self::allocate(
+            viewport,
+            crate::memory::zeroed_vec,
+            crate::memory::zeroed_vec,
+        )
+    }
+
+    /// The frame's two buffers from the allocators (given the pixel count), after
+    /// checking that the frame fits in memory; an error naming the size otherwise.
+    fn allocate(
+        viewport: Viewport,
+        ids: impl FnOnce(usize) -> Option<Vec<u32>>,
+        depth: impl FnOnce(usize) -> Option<Vec<f32>>,
+    ) -> Result<Self> {
         let n = viewport.pixel_count();
         let refuse = |reason: String| Error::InvalidViewport {
             width: u64::from(viewport.width),
@@ -67,10 +71,9 @@ impl Frame {
             reason,
         };
         check_fits(viewport, available_memory()).map_err(refuse)?;
-        let ids = crate::memory::zeroed_vec(n)
-            .ok_or_else(|| refuse(format!("cannot allocate {} MiB for ids", (n * 4) >> 20)))?;
-        let depth = crate::memory::zeroed_vec(n)
-            .ok_or_else(|| refuse(format!("cannot allocate {} MiB for depths", (n * 4) >> 20)))?;
+        let cannot = |what| refuse(format!("cannot allocate {} MiB for {what}", (n * 4) >> 20));
+        let ids = ids(n).ok_or_else(|| cannot("ids"))?;
+        let depth = depth(n).ok_or_else(|| cannot("depths"))?;
         Ok(Frame {
             width: viewport.width,
             height: viewport.height,
