@@ -10,6 +10,18 @@
 //! and encoded ids into depths and face ids. The depth test takes the nearer key and, on a tie, the lower
 //! face id, so drawing small polygons before big ones gives the frame that drawing
 //! all in order would.
+//!
+//! Why the small polygons are drawn before the big ones and never culled: they are the
+//! big ones' best occluders, and culling them does not pay for its second pass. Measured
+//! on the Sponza atrium (1920x1080, one thread, 169k small triangles of which the final
+//! frame's 16x8-block grid would hide 65k): drawing the big polygons first and skipping
+//! the small ones whose [`block::nearest_key`] is below every farthest key of their
+//! blocks culled 32.5k, 51k when the grid was refreshed as small ones were drawn, but the
+//! big ones, no longer hidden by the small ones, tested 6.3M pixels instead of 5.5M:
+//! 5 % more instructions, 12 % more time (39 % with the refresh). Keeping this order
+//! and culling the small ones against the blocks that some big polygon covers whole (a
+//! bound valid in any order) culled only 13.4k: 0.5 % fewer instructions but 13 % more
+//! time (the second pass reads the small triangles' vertices again).
 
 use crate::Frame;
 #[cfg(target_arch = "x86_64")]
