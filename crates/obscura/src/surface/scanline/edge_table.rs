@@ -10,10 +10,11 @@
 //! sample box has its edges. Horizontal edges never cross a sample line and stay out
 //! of the table: whether a row lying on one is covered is settled by the span check.
 //!
-//! The table holds only `(polygon, edge)` pairs (8 bytes an edge); an edge's function
-//! and slope are set up when it enters the active list, from its polygon's data made
-//! when the polygon's first edge enters. Memory therefore follows the active faces,
-//! not the scene.
+//! The table holds only `(polygon, edge, last row)` (12 bytes an edge): the rows an
+//! edge is active on are found once, here, with the polygon's sample box. An edge's
+//! function and slope are set up when it enters the active list, from its polygon's
+//! data made when the polygon's first edge enters. Memory therefore follows the active
+//! faces, not the scene.
 
 use crate::raster::EdgeFunction;
 #[cfg(doc)]
@@ -205,13 +206,16 @@ fn first_true(lo: i64, hi: i64, guess: i64, pred: impl Fn(i64) -> bool) -> i64 {
     i
 }
 
-/// An edge of the table: edge `pair` (from vertex `pair` to the next) of a polygon.
+/// An edge of the table: edge `pair` (from vertex `pair` to the next) of a polygon,
+/// and the last row it is active on.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TableEdge {
     /// The polygon's index in the view.
     pub polygon: u32,
     /// The edge's index in the polygon.
     pub pair: u32,
+    /// The last row it is active on (its first is its bucket's).
+    pub last_row: u32,
 }
 
 /// Edges bucketed by their first active row (flat arrays).
@@ -261,18 +265,18 @@ fn box_rows(poly: &ViewPolygon<'_>, width: u32, height: u32) -> Option<(u32, u32
     (x0 < x1 && y0 < y1).then_some((y0, y1))
 }
 
-/// Calls `f(pair, first)` for each edge of a polygon with box rows `y0..y1` that is
-/// active on some row, `first` being its first row.
+/// Calls `f(pair, (first, last))` for each edge of a polygon with box rows `y0..y1`
+/// that is active on some row, `first..=last` being its rows.
 #[inline]
-fn for_each_edge(poly: &ViewPolygon<'_>, (y0, y1): (u32, u32), mut f: impl FnMut(u32, u32)) {
+fn for_each_edge(poly: &ViewPolygon<'_>, (y0, y1): (u32, u32), mut f: impl FnMut(u32, (u32, u32))) {
     let n = poly.len();
     for pair in 0..n {
         let (p, q) = (poly.vertex(pair), poly.vertex((pair + 1) % n));
         if p.y == q.y {
             continue;
         }
-        if let Some((first, _)) = edge_rows(p.y.min(q.y), p.y.max(q.y), y0, y1) {
-            f(pair as u32, first);
+        if let Some(rows) = edge_rows(p.y.min(q.y), p.y.max(q.y), y0, y1) {
+            f(pair as u32, rows);
         }
     }
 }
@@ -287,12 +291,13 @@ impl EdgeTable {
         for (k, poly) in view.polygons().enumerate() {
             // The box the coverage rule will use; no box, no coverage.
             if let Some(rows) = box_rows(&poly, width, height) {
-                for_each_edge(&poly, rows, |pair, first| {
+                for_each_edge(&poly, rows, |pair, (first, last_row)| {
                     placed.push((
                         first,
                         TableEdge {
                             polygon: k as u32,
                             pair,
+                            last_row,
                         },
                     ));
                 });
@@ -310,7 +315,8 @@ impl EdgeTable {
         let mut edges = vec![
             TableEdge {
                 polygon: 0,
-                pair: 0
+                pair: 0,
+                last_row: 0,
             };
             placed.len()
         ];
