@@ -656,21 +656,16 @@ impl Scanner<'_> {
         let crossings = &all[..self.unsorted.len()];
         self.kept.valid = false;
         let mut x = 0;
-        let mut i = 0;
-        while i < crossings.len() {
-            let cx = crossings[i].x;
-            if cx > x {
-                self.span(y, x, cx);
-                x = cx;
+        for c in crossings {
+            // The span up to this crossing's pixel, once per pixel with crossings.
+            if c.x > x {
+                self.span(y, x, c.x);
+                x = c.x;
             }
-            while i < crossings.len() && crossings[i].x == cx {
-                let d = crossings[i].data;
-                if d & 1 != 0 {
-                    self.enter((d >> 1) as usize, cx);
-                } else {
-                    self.leave(d >> 1);
-                }
-                i += 1;
+            if c.data & 1 != 0 {
+                self.enter((c.data >> 1) as usize, c.x);
+            } else {
+                self.leave(c.data >> 1);
             }
         }
         debug_assert!(self.set.slot.is_empty(), "every face leaves on its row");
@@ -737,7 +732,10 @@ impl Scanner<'_> {
         }
     }
 
-    /// Draws the span `x0..x1` of row `y` from the faces whose flag is in.
+    /// Draws the span `x0..x1` of row `y` from the faces whose flag is in. Inlined in
+    /// the walk: most spans are background, one face or the kept nearest face, and
+    /// need no call; the others go to [`Self::nearest`].
+    #[inline(always)]
     fn span(&mut self, y: u32, x0: u32, x1: u32) {
         let decision = match self.set.slot.len() {
             0 => SpanDecision::Background,
@@ -754,16 +752,29 @@ impl Scanner<'_> {
                 };
                 SpanDecision::SingleFace
             }
+            _ if self.kept.valid => {
+                self.counters.spans += 1;
+                self.counters.kept += 1;
+                self.fill(y, x0, x1, self.kept.slot);
+                SpanDecision::KeptNearest
+            }
             _ => {
                 self.counters.spans += 1;
                 self.nearest(y, x0, x1)
             }
         };
         if self.trace.is_some() {
-            let t = self.traced(x0, x1, decision);
-            if let Some(tr) = &mut self.trace {
-                tr.spans.push(t);
-            }
+            self.trace_span(x0, x1, decision);
+        }
+    }
+
+    /// Records a span in the trace.
+    #[cold]
+    #[inline(never)]
+    fn trace_span(&mut self, x0: u32, x1: u32, decision: SpanDecision) {
+        let t = self.traced(x0, x1, decision);
+        if let Some(tr) = &mut self.trace {
+            tr.spans.push(t);
         }
     }
 
@@ -790,17 +801,13 @@ impl Scanner<'_> {
         }
     }
 
-    /// Decides and draws a span with several faces: by the nearest face kept along the
-    /// row, else by coherence with the previous row, else by comparing the keys at the
-    /// span's ends
-    /// (and, to keep the winner along the row, at the end of each face's common span
-    /// with it), else pixel by pixel.
+    /// Decides and draws a span with several faces and no kept nearest face (see
+    /// [`Self::span`]): by coherence with the previous row, else by comparing the keys
+    /// at the span's ends (and, to keep the winner along the row, at the end of each
+    /// face's common span with it), else pixel by pixel.
+    #[inline(never)]
     fn nearest(&mut self, y: u32, x0: u32, x1: u32) -> SpanDecision {
-        if self.kept.valid {
-            self.counters.kept += 1;
-            self.fill(y, x0, x1, self.kept.slot);
-            return SpanDecision::KeptNearest;
-        }
+        debug_assert!(!self.kept.valid);
         let k = self.set.slot.len();
         let hash = self.set.hash;
         let seen = self.coherence.find(x0, x1, hash, k, &self.faces.position);
