@@ -422,9 +422,16 @@ impl Scanner<'_> {
         // Touch the first vertex of each polygon set up on this row first: their cache
         // misses then overlap here instead of stalling the setups one after another.
         let mut touched = 0.0;
+        let (starts, indices, _) = self.view.polygon_arrays();
+        let vertices = self.view.vertices();
         for &TableEdge { polygon, .. } in bucket {
             if self.faces.slot_of[polygon as usize] == NONE {
-                touched += self.view.polygon(polygon as usize).vertex(0).x;
+                let first = starts
+                    .get(polygon as usize)
+                    .and_then(|&k| indices.get(k as usize));
+                touched += first
+                    .and_then(|&v| vertices.get(v as usize))
+                    .map_or(0.0, |v| v.x);
             }
         }
         std::hint::black_box(touched);

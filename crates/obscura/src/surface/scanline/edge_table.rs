@@ -79,9 +79,13 @@ impl ScanEdge {
     /// centres around the crossing. `None` sends the edge to [`exact_pixel`].
     ///
     /// `v = x - 0.5` is rounded to the nearest integer `r` by adding and subtracting
-    /// `1.5 * 2^52` (exact for `|v| < 2^30`, which is checked), and the low bits of
-    /// the sum are `r` itself; `v - r` is then exact, so the distance to the nearest
-    /// centre is compared without rounding. NaN fails every test.
+    /// `1.5 * 2^52` (exact for `|v| < 2^30`), and the low bits of the sum are `r`
+    /// itself; `v - r` is then exact, so the distance to the nearest centre is
+    /// compared without rounding. NaN and infinities fail the test.
+    ///
+    /// Precondition, not checked here (it is per edge, not per row): a finite
+    /// `tolerance` only for an `x` within `2^29` of the origin, which [`tolerance`]
+    /// ensures (it is infinite for an edge reaching farther).
     #[inline(always)]
     pub fn settled_pixel(x: f64, tolerance: f64) -> Option<i64> {
         const ROUND: f64 = 6_755_399_441_055_744.0;
@@ -89,7 +93,7 @@ impl ScanEdge {
         let sum = v + ROUND;
         let d = v - (sum - ROUND);
         let r = i64::from(sum.to_bits() as u32 as i32);
-        (v.abs() < 1_073_741_824.0 && d.abs() > tolerance).then_some(r + i64::from(d > 0.0))
+        (d.abs() > tolerance).then_some(r + i64::from(d > 0.0))
     }
 }
 
@@ -127,7 +131,10 @@ pub(crate) fn exact_pixel(
 /// sum and of `s`); the edge test `dx (py - oy) - dy (px - ox)` is off by at most
 /// `2u (|dx| |py - oy| + |dy| |px - ox|)`, which is `2u (|s| |py - oy| + |px - ox|)`
 /// in pixels. The sum is taken with `|py - oy| <= |dy| + 2`, `|x|, |px - ox| <= the
-/// edge's extent + 2`, doubled twice for safety; infinite if not finite or not small.
+/// edge's extent + 2`, doubled twice for safety; infinite if not finite or not small,
+/// and for an edge reaching `2^29` pixels from the origin or farther (so that a
+/// stepped `x`, within the bound of the edge, stays where
+/// [`ScanEdge::settled_pixel`] can round it).
 pub(crate) fn tolerance(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
     let u = f64::EPSILON; // twice the unit roundoff
     let x_extent = e.ox.abs().max((e.ox + e.dx).abs()) + e.dx.abs() + 2.0;
@@ -135,8 +142,15 @@ pub(crate) fn tolerance(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
     let s = s.abs();
     let bound =
         4.0 * u * (x_extent + 8.0 * y_extent * s + (f64::from(rows) + 4.0) * (s + x_extent) + 4.0);
-    if bound < 0.25 { bound } else { f64::INFINITY }
+    if bound < 0.25 && x_extent < REACH {
+        bound
+    } else {
+        f64::INFINITY
+    }
 }
+
+/// `2^29`: edges reaching this far from the origin have no [`tolerance`].
+const REACH: f64 = 536_870_912.0;
 
 /// `ceil(v)` clamped to `lo..=hi` (`lo >= 0`; `lo` for NaN), without a call to the
 /// C library's `ceil` on targets without a rounding instruction.
@@ -407,7 +421,15 @@ mod tests {
     #[test]
     fn settled_pixel_is_the_first_centre_right_of_x_when_far_from_centres() {
         let t = 1e-6;
-        let mut xs = vec![f64::NAN, f64::INFINITY, -f64::INFINITY, 1e12, -1e12, 3e9];
+        // Within the reach of a finite tolerance (see `tolerance`), and the values
+        // that must settle nothing.
+        let mut xs = vec![
+            f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            5e8 + 0.25,
+            -5e8 - 0.75,
+        ];
         for k in -40..400 {
             let c = f64::from(k) * 0.25;
             xs.extend([c, c + 1e-7, c - 1e-7, c + 2e-6, c - 2e-6, c + 0.1, c + 0.37]);
@@ -416,12 +438,31 @@ mod tests {
             let v = x - 0.5;
             // Independent expectation: the library floor and the distance to the
             // nearest centre.
-            let far = (v - v.round()).abs() > t && v.abs() < 1e9;
+            let far = (v - v.round()).abs() > t;
             let expected = far.then(|| (v.floor() + 1.0) as i64);
             assert_eq!(ScanEdge::settled_pixel(x, t), expected, "{x}");
         }
         // An unknown bound settles nothing.
         assert_eq!(ScanEdge::settled_pixel(3.2, f64::INFINITY), None);
+    }
+
+    #[test]
+    fn tolerance_is_infinite_for_edges_out_of_reach() {
+        let edge = |ox: f64, dx: f64| EdgeFunction {
+            ox,
+            oy: 0.0,
+            dx,
+            dy: 10.0,
+            sign: 1.0,
+            include_zero: false,
+        };
+        // A small edge near the origin: a tiny, finite bound.
+        let near = tolerance(&edge(100.0, 5.0), 0.5, 10);
+        assert!(near > 0.0 && near < 1e-9, "{near}");
+        // Edges starting, ending or lying beyond 2^29: no bound.
+        for (ox, dx) in [(6e8, 1.0), (100.0, 6e8), (-6e8, 5.0), (1e20, 0.0)] {
+            assert_eq!(tolerance(&edge(ox, dx), dx / 10.0, 10), f64::INFINITY);
+        }
     }
 
     #[test]

@@ -334,6 +334,7 @@ impl Faces {
     /// Sets up `polygon` of the view in a free slot and adds it to the live faces,
     /// without edges yet. Returns the slot, or [`DEAD`] (remembered) if it covers
     /// nothing.
+    #[inline]
     pub fn activate(&mut self, view: &PreparedView<'_>, polygon: u32) -> u32 {
         let poly = view.polygon(polygon as usize);
         let n = poly.len();
