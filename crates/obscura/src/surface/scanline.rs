@@ -58,7 +58,7 @@
 //! Complexity: O(E + H) to build the table (E edges, H rows), then per row O(A + W)
 //! for the A active edges and W columns, per span O(1) when the kept nearest face
 //! decides it and O(k) for its k faces otherwise, and O(k) per pixel only in spans
-//! decided pixel by pixel. Every pixel is written once. Memory: 8 bytes per edge in
+//! decided pixel by pixel. Every pixel is written once. Memory: 12 bytes per edge in
 //! the table, plus the active faces.
 //!
 //! Limitations: depth is exact for planar polygons (every prepared polygon is);
@@ -376,12 +376,13 @@ fn fill_keys(frame: &mut Frame, y: u32, x0: u32, x1: u32, plane: &DepthPlane, fa
 }
 
 /// Turns the stored keys of the drawn pixels into eye-space depths, in one pass at the
-/// end rather than a division per pixel while spans are drawn.
+/// end rather than a division per pixel while spans are drawn. Every pixel's depth is
+/// computed and the background's discarded by a select, without a branch: the loop
+/// then runs on vector lanes.
 fn keys_to_depths(frame: &mut Frame, t: &ViewTransform) {
     for (d, &id) in frame.depth.iter_mut().zip(&frame.ids) {
-        if id != BACKGROUND {
-            *d = t.depth_of_zq(f64::from(*d)) as f32;
-        }
+        let depth = t.depth_of_zq(f64::from(*d)) as f32;
+        *d = if id != BACKGROUND { depth } else { *d };
     }
 }
 
@@ -421,13 +422,25 @@ impl Scanner<'_> {
         // Touch the first vertex of each polygon set up on this row first: their cache
         // misses then overlap here instead of stalling the setups one after another.
         let mut touched = 0.0;
+        let (starts, indices, _) = self.view.polygon_arrays();
+        let vertices = self.view.vertices();
         for &TableEdge { polygon, .. } in bucket {
             if self.faces.slot_of[polygon as usize] == NONE {
-                touched += self.view.polygon(polygon as usize).vertex(0).x;
+                let first = starts
+                    .get(polygon as usize)
+                    .and_then(|&k| indices.get(k as usize));
+                touched += first
+                    .and_then(|&v| vertices.get(v as usize))
+                    .map_or(0.0, |v| v.x);
             }
         }
         std::hint::black_box(touched);
-        for &TableEdge { polygon, pair } in bucket {
+        for &TableEdge {
+            polygon,
+            pair,
+            last_row,
+        } in bucket
+        {
             let mut s = self.faces.slot_of[polygon as usize];
             if s == NONE {
                 s = self.faces.activate(self.view, polygon);
@@ -439,7 +452,6 @@ impl Scanner<'_> {
                 continue;
             };
             let e = self.faces.edges.of(s)[k as usize];
-            let last_row = self.faces.edges.last_row(s, pair);
             debug_assert!(e.dy > 0.0 && last_row >= y);
             let inverse_slope = e.dx / e.dy;
             self.faces.add_edge(
@@ -651,21 +663,16 @@ impl Scanner<'_> {
         let crossings = &all[..self.unsorted.len()];
         self.kept.valid = false;
         let mut x = 0;
-        let mut i = 0;
-        while i < crossings.len() {
-            let cx = crossings[i].x;
-            if cx > x {
-                self.span(y, x, cx);
-                x = cx;
+        for c in crossings {
+            // The span up to this crossing's pixel, once per pixel with crossings.
+            if c.x > x {
+                self.span(y, x, c.x);
+                x = c.x;
             }
-            while i < crossings.len() && crossings[i].x == cx {
-                let d = crossings[i].data;
-                if d & 1 != 0 {
-                    self.enter((d >> 1) as usize, cx);
-                } else {
-                    self.leave(d >> 1);
-                }
-                i += 1;
+            if c.data & 1 != 0 {
+                self.enter((c.data >> 1) as usize, c.x);
+            } else {
+                self.leave(c.data >> 1);
             }
         }
         debug_assert!(self.set.slot.is_empty(), "every face leaves on its row");
@@ -732,7 +739,10 @@ impl Scanner<'_> {
         }
     }
 
-    /// Draws the span `x0..x1` of row `y` from the faces whose flag is in.
+    /// Draws the span `x0..x1` of row `y` from the faces whose flag is in. Inlined in
+    /// the walk: most spans are background, one face or the kept nearest face, and
+    /// need no call; the others go to [`Self::nearest`].
+    #[inline(always)]
     fn span(&mut self, y: u32, x0: u32, x1: u32) {
         let decision = match self.set.slot.len() {
             0 => SpanDecision::Background,
@@ -749,16 +759,29 @@ impl Scanner<'_> {
                 };
                 SpanDecision::SingleFace
             }
+            _ if self.kept.valid => {
+                self.counters.spans += 1;
+                self.counters.kept += 1;
+                self.fill(y, x0, x1, self.kept.slot);
+                SpanDecision::KeptNearest
+            }
             _ => {
                 self.counters.spans += 1;
                 self.nearest(y, x0, x1)
             }
         };
         if self.trace.is_some() {
-            let t = self.traced(x0, x1, decision);
-            if let Some(tr) = &mut self.trace {
-                tr.spans.push(t);
-            }
+            self.trace_span(x0, x1, decision);
+        }
+    }
+
+    /// Records a span in the trace.
+    #[cold]
+    #[inline(never)]
+    fn trace_span(&mut self, x0: u32, x1: u32, decision: SpanDecision) {
+        let t = self.traced(x0, x1, decision);
+        if let Some(tr) = &mut self.trace {
+            tr.spans.push(t);
         }
     }
 
@@ -785,17 +808,13 @@ impl Scanner<'_> {
         }
     }
 
-    /// Decides and draws a span with several faces: by the nearest face kept along the
-    /// row, else by coherence with the previous row, else by comparing the keys at the
-    /// span's ends
-    /// (and, to keep the winner along the row, at the end of each face's common span
-    /// with it), else pixel by pixel.
+    /// Decides and draws a span with several faces and no kept nearest face (see
+    /// [`Self::span`]): by coherence with the previous row, else by comparing the keys
+    /// at the span's ends (and, to keep the winner along the row, at the end of each
+    /// face's common span with it), else pixel by pixel.
+    #[inline(never)]
     fn nearest(&mut self, y: u32, x0: u32, x1: u32) -> SpanDecision {
-        if self.kept.valid {
-            self.counters.kept += 1;
-            self.fill(y, x0, x1, self.kept.slot);
-            return SpanDecision::KeptNearest;
-        }
+        debug_assert!(!self.kept.valid);
         let k = self.set.slot.len();
         let hash = self.set.hash;
         let seen = self.coherence.find(x0, x1, hash, k, &self.faces.position);

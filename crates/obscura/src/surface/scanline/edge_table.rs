@@ -10,10 +10,11 @@
 //! sample box has its edges. Horizontal edges never cross a sample line and stay out
 //! of the table: whether a row lying on one is covered is settled by the span check.
 //!
-//! The table holds only `(polygon, edge)` pairs (8 bytes an edge); an edge's function
-//! and slope are set up when it enters the active list, from its polygon's data made
-//! when the polygon's first edge enters. Memory therefore follows the active faces,
-//! not the scene.
+//! The table holds only `(polygon, edge, last row)` (12 bytes an edge): the rows an
+//! edge is active on are found once, here, with the polygon's sample box. An edge's
+//! function and slope are set up when it enters the active list, from its polygon's
+//! data made when the polygon's first edge enters. Memory therefore follows the active
+//! faces, not the scene.
 
 use crate::raster::EdgeFunction;
 #[cfg(doc)]
@@ -78,9 +79,13 @@ impl ScanEdge {
     /// centres around the crossing. `None` sends the edge to [`exact_pixel`].
     ///
     /// `v = x - 0.5` is rounded to the nearest integer `r` by adding and subtracting
-    /// `1.5 * 2^52` (exact for `|v| < 2^30`, which is checked), and the low bits of
-    /// the sum are `r` itself; `v - r` is then exact, so the distance to the nearest
-    /// centre is compared without rounding. NaN fails every test.
+    /// `1.5 * 2^52` (exact for `|v| < 2^30`), and the low bits of the sum are `r`
+    /// itself; `v - r` is then exact, so the distance to the nearest centre is
+    /// compared without rounding. NaN and infinities fail the test.
+    ///
+    /// Precondition, not checked here (it is per edge, not per row): a finite
+    /// `tolerance` only for an `x` within `2^29` of the origin, which [`tolerance`]
+    /// ensures (it is infinite for an edge reaching farther).
     #[inline(always)]
     pub fn settled_pixel(x: f64, tolerance: f64) -> Option<i64> {
         const ROUND: f64 = 6_755_399_441_055_744.0;
@@ -88,7 +93,7 @@ impl ScanEdge {
         let sum = v + ROUND;
         let d = v - (sum - ROUND);
         let r = i64::from(sum.to_bits() as u32 as i32);
-        (v.abs() < 1_073_741_824.0 && d.abs() > tolerance).then_some(r + i64::from(d > 0.0))
+        (d.abs() > tolerance).then_some(r + i64::from(d > 0.0))
     }
 }
 
@@ -126,7 +131,10 @@ pub(crate) fn exact_pixel(
 /// sum and of `s`); the edge test `dx (py - oy) - dy (px - ox)` is off by at most
 /// `2u (|dx| |py - oy| + |dy| |px - ox|)`, which is `2u (|s| |py - oy| + |px - ox|)`
 /// in pixels. The sum is taken with `|py - oy| <= |dy| + 2`, `|x|, |px - ox| <= the
-/// edge's extent + 2`, doubled twice for safety; infinite if not finite or not small.
+/// edge's extent + 2`, doubled twice for safety; infinite if not finite or not small,
+/// and for an edge reaching `2^29` pixels from the origin or farther (so that a
+/// stepped `x`, within the bound of the edge, stays where
+/// [`ScanEdge::settled_pixel`] can round it).
 pub(crate) fn tolerance(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
     let u = f64::EPSILON; // twice the unit roundoff
     let x_extent = e.ox.abs().max((e.ox + e.dx).abs()) + e.dx.abs() + 2.0;
@@ -134,8 +142,15 @@ pub(crate) fn tolerance(e: &EdgeFunction, s: f64, rows: u32) -> f64 {
     let s = s.abs();
     let bound =
         4.0 * u * (x_extent + 8.0 * y_extent * s + (f64::from(rows) + 4.0) * (s + x_extent) + 4.0);
-    if bound < 0.25 { bound } else { f64::INFINITY }
+    if bound < 0.25 && x_extent < REACH {
+        bound
+    } else {
+        f64::INFINITY
+    }
 }
+
+/// `2^29`: edges reaching this far from the origin have no [`tolerance`].
+const REACH: f64 = 536_870_912.0;
 
 /// `ceil(v)` clamped to `lo..=hi` (`lo >= 0`; `lo` for NaN), without a call to the
 /// C library's `ceil` on targets without a rounding instruction.
@@ -205,13 +220,16 @@ fn first_true(lo: i64, hi: i64, guess: i64, pred: impl Fn(i64) -> bool) -> i64 {
     i
 }
 
-/// An edge of the table: edge `pair` (from vertex `pair` to the next) of a polygon.
+/// An edge of the table: edge `pair` (from vertex `pair` to the next) of a polygon,
+/// and the last row it is active on.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TableEdge {
     /// The polygon's index in the view.
     pub polygon: u32,
     /// The edge's index in the polygon.
     pub pair: u32,
+    /// The last row it is active on (its first is its bucket's).
+    pub last_row: u32,
 }
 
 /// Edges bucketed by their first active row (flat arrays).
@@ -261,18 +279,18 @@ fn box_rows(poly: &ViewPolygon<'_>, width: u32, height: u32) -> Option<(u32, u32
     (x0 < x1 && y0 < y1).then_some((y0, y1))
 }
 
-/// Calls `f(pair, first)` for each edge of a polygon with box rows `y0..y1` that is
-/// active on some row, `first` being its first row.
+/// Calls `f(pair, (first, last))` for each edge of a polygon with box rows `y0..y1`
+/// that is active on some row, `first..=last` being its rows.
 #[inline]
-fn for_each_edge(poly: &ViewPolygon<'_>, (y0, y1): (u32, u32), mut f: impl FnMut(u32, u32)) {
+fn for_each_edge(poly: &ViewPolygon<'_>, (y0, y1): (u32, u32), mut f: impl FnMut(u32, (u32, u32))) {
     let n = poly.len();
     for pair in 0..n {
         let (p, q) = (poly.vertex(pair), poly.vertex((pair + 1) % n));
         if p.y == q.y {
             continue;
         }
-        if let Some((first, _)) = edge_rows(p.y.min(q.y), p.y.max(q.y), y0, y1) {
-            f(pair as u32, first);
+        if let Some(rows) = edge_rows(p.y.min(q.y), p.y.max(q.y), y0, y1) {
+            f(pair as u32, rows);
         }
     }
 }
@@ -287,12 +305,13 @@ impl EdgeTable {
         for (k, poly) in view.polygons().enumerate() {
             // The box the coverage rule will use; no box, no coverage.
             if let Some(rows) = box_rows(&poly, width, height) {
-                for_each_edge(&poly, rows, |pair, first| {
+                for_each_edge(&poly, rows, |pair, (first, last_row)| {
                     placed.push((
                         first,
                         TableEdge {
                             polygon: k as u32,
                             pair,
+                            last_row,
                         },
                     ));
                 });
@@ -310,7 +329,8 @@ impl EdgeTable {
         let mut edges = vec![
             TableEdge {
                 polygon: 0,
-                pair: 0
+                pair: 0,
+                last_row: 0,
             };
             placed.len()
         ];
@@ -401,7 +421,15 @@ mod tests {
     #[test]
     fn settled_pixel_is_the_first_centre_right_of_x_when_far_from_centres() {
         let t = 1e-6;
-        let mut xs = vec![f64::NAN, f64::INFINITY, -f64::INFINITY, 1e12, -1e12, 3e9];
+        // Within the reach of a finite tolerance (see `tolerance`), and the values
+        // that must settle nothing.
+        let mut xs = vec![
+            f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            5e8 + 0.25,
+            -5e8 - 0.75,
+        ];
         for k in -40..400 {
             let c = f64::from(k) * 0.25;
             xs.extend([c, c + 1e-7, c - 1e-7, c + 2e-6, c - 2e-6, c + 0.1, c + 0.37]);
@@ -410,12 +438,31 @@ mod tests {
             let v = x - 0.5;
             // Independent expectation: the library floor and the distance to the
             // nearest centre.
-            let far = (v - v.round()).abs() > t && v.abs() < 1e9;
+            let far = (v - v.round()).abs() > t;
             let expected = far.then(|| (v.floor() + 1.0) as i64);
             assert_eq!(ScanEdge::settled_pixel(x, t), expected, "{x}");
         }
         // An unknown bound settles nothing.
         assert_eq!(ScanEdge::settled_pixel(3.2, f64::INFINITY), None);
+    }
+
+    #[test]
+    fn tolerance_is_infinite_for_edges_out_of_reach() {
+        let edge = |ox: f64, dx: f64| EdgeFunction {
+            ox,
+            oy: 0.0,
+            dx,
+            dy: 10.0,
+            sign: 1.0,
+            include_zero: false,
+        };
+        // A small edge near the origin: a tiny, finite bound.
+        let near = tolerance(&edge(100.0, 5.0), 0.5, 10);
+        assert!(near > 0.0 && near < 1e-9, "{near}");
+        // Edges starting, ending or lying beyond 2^29: no bound.
+        for (ox, dx) in [(6e8, 1.0), (100.0, 6e8), (-6e8, 5.0), (1e20, 0.0)] {
+            assert_eq!(tolerance(&edge(ox, dx), dx / 10.0, 10), f64::INFINITY);
+        }
     }
 
     #[test]

@@ -20,7 +20,7 @@
 //! [`crate::raster::PolygonCoverage`]'s edges and box); bigger polygons go through
 //! `PolygonCoverage` itself.
 
-use super::edge_table::{ScanEdge, edge_rows, round_down, round_up, sample_range, tolerance};
+use super::edge_table::{ScanEdge, round_down, round_up, sample_range, tolerance};
 #[cfg(doc)]
 use crate::raster::TriangleSetup;
 use crate::raster::{DepthPlane, EdgeFunction, FillRule, PixelRect, PolygonCoverage, PolygonSetup};
@@ -110,10 +110,6 @@ pub(crate) struct EdgeStore {
     /// Per slot: for polygons that are not triangles, the edge function index of each
     /// vertex pair (`NONE` for a zero-length pair).
     pair_edge: Vec<Vec<u32>>,
-    /// Per slot: the last row of the edge of each vertex pair (`INLINE_EDGES` per slot,
-    /// then the overflow).
-    last_rows: Vec<u32>,
-    last_rows_overflow: Vec<Vec<u32>>,
     count: Vec<u32>,
 }
 
@@ -152,54 +148,10 @@ impl EdgeStore {
         }
     }
 
-    /// The last row of the edge from vertex `pair` of the face in slot `s`.
-    #[inline]
-    pub fn last_row(&self, s: u32, pair: u32) -> u32 {
-        let (s, pair) = (s as usize, pair as usize);
-        if pair < INLINE_EDGES {
-            self.last_rows[s * INLINE_EDGES + pair]
-        } else {
-            self.last_rows_overflow[s][pair - INLINE_EDGES]
-        }
-    }
-
-    /// Records the last row of each vertex pair's edge of a polygon with box rows
-    /// `y0..y1` and these points (0 for a pair never active).
-    fn store_last_rows(
-        &mut self,
-        s: usize,
-        n: usize,
-        point: impl Fn(usize) -> (f64, f64),
-        rows: (u32, u32),
-    ) {
-        self.last_rows_overflow[s].clear();
-        for pair in 0..n {
-            let (p, q) = (point(pair), point((pair + 1) % n));
-            let last = edge_rows(p.1.min(q.1), p.1.max(q.1), rows.0, rows.1).map_or(0, |r| r.1);
-            if pair < INLINE_EDGES {
-                self.last_rows[s * INLINE_EDGES + pair] = last;
-            } else {
-                self.last_rows_overflow[s].push(last);
-            }
-        }
-    }
-
-    /// [`Self::store_last_rows`] for a triangle.
-    #[inline]
-    fn store_triangle_last_rows(&mut self, s: usize, p: &[(f64, f64, f64); 3], rows: (u32, u32)) {
-        let at = s * INLINE_EDGES;
-        for (pair, last) in self.last_rows[at..at + 3].iter_mut().enumerate() {
-            let (a, b) = (p[pair].1, p[[1, 2, 0][pair]].1);
-            *last = edge_rows(a.min(b), a.max(b), rows.0, rows.1).map_or(0, |r| r.1);
-        }
-    }
-
     fn grow(&mut self) {
         self.inline.extend_from_slice(&[NO_EDGE; INLINE_EDGES]);
         self.overflow.push(Vec::new());
         self.pair_edge.push(Vec::new());
-        self.last_rows.extend_from_slice(&[0; INLINE_EDGES]);
-        self.last_rows_overflow.push(Vec::new());
         self.count.push(0);
     }
 
@@ -382,6 +334,7 @@ impl Faces {
     /// Sets up `polygon` of the view in a free slot and adds it to the live faces,
     /// without edges yet. Returns the slot, or [`DEAD`] (remembered) if it covers
     /// nothing.
+    #[inline]
     pub fn activate(&mut self, view: &PreparedView<'_>, polygon: u32) -> u32 {
         let poly = view.polygon(polygon as usize);
         let n = poly.len();
@@ -418,8 +371,6 @@ impl Faces {
                 let area2 =
                     (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[1].1 - p[0].1) * (p[2].0 - p[0].0);
                 check = triangle_check_rows(p, area2, rect.y1 - rect.y0);
-                self.edges
-                    .store_triangle_last_rows(si, &p, (rect.y0, rect.y1));
                 (rect, plane)
             })
         } else if PolygonSetup::<16>::fits(n) {
@@ -454,12 +405,6 @@ impl Faces {
             return DEAD;
         };
         if n != 3 {
-            self.edges.store_last_rows(
-                si,
-                n,
-                |k| (poly.vertex(k).x, poly.vertex(k).y),
-                (rect.y0, rect.y1),
-            );
             // The setups made one edge function per pair of distinct consecutive points.
             let map = &mut self.edges.pair_edge[si];
             let mut k = 0;

@@ -148,6 +148,7 @@ pub(crate) fn intersect(a: PixelRect, b: PixelRect) -> PixelRect {
 /// overlap of the polygons) with a margin suffices. Conservative: `false` when the
 /// planes cross inside the box even if the polygons do not overlap there. Returns the
 /// number of key comparisons made with the answer.
+#[inline]
 pub(crate) fn hides_over_overlap(
     near: &DepthPlane,
     near_box: PixelRect,
