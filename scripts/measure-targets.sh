@@ -12,27 +12,20 @@ ATRIUM=(--eye 0,-10,2 --target 0,10,4 --up 0,0,1 --fov 60)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
-# min over runs of a JSON field path (dot separated) of --stats-json
-measure() { # name field -- args...
-  local name=$1 field=$2; shift 3
-  local best=""
-  for _ in $(seq "$RUNS"); do
-    "$BIN" render "$@" --size 1920x1080 --threads 1 --stats-json "$tmp/s.json" -o "$tmp/o.png" >/dev/null
-    v=$(python3 -c "import json,sys; d=json.load(open('$tmp/s.json')); f='$field'.split('.'); [d:=d[k] for k in f]; print(d)")
-    best=$(python3 -c "b='$best'; v=float('$v'); print(v if b=='' else min(float(b), v))")
-  done
-  printf '%-58s %12.2f\n' "$name" "$best"
-}
-measure_max() { # like measure, but the maximum (for rates)
-  local name=$1 field=$2; shift 3
+# best over runs of a JSON field path (dot separated) of --stats-json: the minimum
+# (times) or, with pick=max, the maximum (rates)
+measure_with() { # pick name field -- args...
+  local pick=$1 name=$2 field=$3; shift 4
   local best=""
   for _ in $(seq "$RUNS"); do
     "$BIN" render "$@" --size 1920x1080 --threads 1 --stats-json "$tmp/s.json" -o "$tmp/o.png" >/dev/null
     v=$(python3 -c "import json; d=json.load(open('$tmp/s.json')); f='$field'.split('.'); [d:=d[k] for k in f]; print(d)")
-    best=$(python3 -c "b='$best'; v=float('$v'); print(v if b=='' else max(float(b), v))")
+    best=$(python3 -c "b='$best'; v=float('$v'); print(v if b=='' else $pick(float(b), v))")
   done
   printf '%-58s %12.2f\n' "$name" "$best"
 }
+measure() { measure_with min "$@"; }
+measure_max() { measure_with max "$@"; }
 
 echo "figure (min of $RUNS runs; rates: max)                              value"
 if [[ -f $SPONZA ]]; then

@@ -462,35 +462,7 @@ pub fn prepare<'s>(
     let mut stats = PipelineStats::default();
     let threads = passes::thread_count();
 
-    // Objects: frustum culling by bounding sphere, then box.
-    let start = Instant::now();
-    let planes = frustum_planes(&t.view_projection);
-    let mut visible: Vec<(usize, bool)> = Vec::with_capacity(scene.objects().len());
-    for (k, o) in scene.objects().iter().enumerate() {
-        if o.mesh.polygon_count() == 0 {
-            continue;
-        }
-        if !options.frustum_cull_objects {
-            visible.push((k, false));
-            continue;
-        }
-        let c = match classify_sphere(&planes, &o.sphere) {
-            Containment::Outside => Containment::Outside,
-            _ => classify_aabb(&t.view_projection, &o.bounds),
-        };
-        match c {
-            Containment::Outside => {}
-            Containment::Inside => visible.push((k, true)),
-            Containment::Intersecting => visible.push((k, false)),
-        }
-    }
-    stats.push(
-        "objects: frustum (sphere, box)",
-        "objects",
-        scene.objects().len() as u64,
-        visible.len() as u64,
-        start,
-    );
+    let visible = visible_objects(scene, &t, options, &mut stats);
 
     // Vertices: world -> eye -> clip, outcodes, screen positions.
     let start = Instant::now();
@@ -562,6 +534,46 @@ pub fn prepare<'s>(
     })
 }
 
+/// The objects to draw, as `(index, wholly inside the frustum)`: those with faces, less
+/// those outside the frustum by their bounding sphere, then box (all of them when
+/// object culling is off). Counted in `stats`.
+fn visible_objects(
+    scene: &Scene,
+    t: &ViewTransform,
+    options: &PrepareOptions,
+    stats: &mut PipelineStats,
+) -> Vec<(usize, bool)> {
+    let start = Instant::now();
+    let planes = frustum_planes(&t.view_projection);
+    let mut visible: Vec<(usize, bool)> = Vec::with_capacity(scene.objects().len());
+    for (k, o) in scene.objects().iter().enumerate() {
+        if o.mesh.polygon_count() == 0 {
+            continue;
+        }
+        if !options.frustum_cull_objects {
+            visible.push((k, false));
+            continue;
+        }
+        let c = match classify_sphere(&planes, &o.sphere) {
+            Containment::Outside => Containment::Outside,
+            _ => classify_aabb(&t.view_projection, &o.bounds),
+        };
+        match c {
+            Containment::Outside => {}
+            Containment::Inside => visible.push((k, true)),
+            Containment::Intersecting => visible.push((k, false)),
+        }
+    }
+    stats.push(
+        "objects: frustum (sphere, box)",
+        "objects",
+        scene.objects().len() as u64,
+        visible.len() as u64,
+        start,
+    );
+    visible
+}
+
 #[cfg(test)]
 mod reference {
     use super::*;
@@ -579,35 +591,7 @@ mod reference {
         let t = ViewTransform::new(camera, viewport);
         let mut stats = PipelineStats::default();
 
-        // Objects: frustum culling by bounding sphere, then box.
-        let start = Instant::now();
-        let planes = frustum_planes(&t.view_projection);
-        let mut visible: Vec<(usize, bool)> = Vec::with_capacity(scene.objects().len());
-        for (k, o) in scene.objects().iter().enumerate() {
-            if o.mesh.polygon_count() == 0 {
-                continue;
-            }
-            if !options.frustum_cull_objects {
-                visible.push((k, false));
-                continue;
-            }
-            let c = match classify_sphere(&planes, &o.sphere) {
-                Containment::Outside => Containment::Outside,
-                _ => classify_aabb(&t.view_projection, &o.bounds),
-            };
-            match c {
-                Containment::Outside => {}
-                Containment::Inside => visible.push((k, true)),
-                Containment::Intersecting => visible.push((k, false)),
-            }
-        }
-        stats.push(
-            "objects: frustum (sphere, box)",
-            "objects",
-            scene.objects().len() as u64,
-            visible.len() as u64,
-            start,
-        );
+        let visible = visible_objects(scene, &t, options, &mut stats);
 
         // Vertices: world -> eye -> clip, outcodes, screen positions.
         let start = Instant::now();

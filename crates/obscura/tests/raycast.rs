@@ -10,9 +10,7 @@ use obscura::accel::bvh::packet::{PACKET, PACKET_SIDE, PacketContext, PacketStac
 use obscura::accel::bvh::traverse::{Kernel, TraceCounters, TraversalStack};
 use obscura::accel::bvh::{Bvh, BvhOptions, Slot, WIDTH};
 use obscura::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
-use obscura::accel::triangles::{
-    ClosestHit, HitContext, PrimaryRays, SceneTriangles, WatertightRay,
-};
+use obscura::accel::triangles::{ClosestHit, PrimaryRays, SceneTriangles, WatertightRay};
 use obscura::cull::backface::BackfaceMode;
 use obscura::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb};
 use obscura::scene::{Camera, MeshBuilder, ObjectDesc, demo};
@@ -316,14 +314,11 @@ fn grid_accepts_hits_only_inside_the_current_cell() {
     let mut mailbox = Mailbox::new(&tris);
     for j in 0..vp.height {
         for i in 0..vp.width {
-            let (o, d) = rays.ray(f64::from(i) + 0.5, f64::from(j) + 0.5);
-            let ctx = HitContext {
-                ray: WatertightRay::new(o, d).unwrap(),
-                ignored: &ignored,
-                faces: tris.polygon_faces(),
-                t_min: rays.near,
-                tie: rays.tie_rule(),
-            };
+            let (px, py) = (f64::from(i) + 0.5, f64::from(j) + 0.5);
+            let (o, d) = rays.ray(px, py);
+            let ctx = rays
+                .context(px, py, &ignored, tris.polygon_faces())
+                .unwrap();
             let out = grid.closest_hit(&tris, &ctx, rays.far, &mut mailbox, &mut counters);
             let Some(cell) = out.cell else {
                 assert!(!out.hit.is_hit());
@@ -408,15 +403,10 @@ fn grid_without_the_cell_rule_would_be_wrong() {
     let grid = UniformGrid::build(&tris, &GridOptions::default().with_density(0.01));
     let vp = Viewport::new(1, 1).unwrap();
     let rays = PrimaryRays::new(&cam, vp);
-    let (o, d) = rays.ray(0.5, 0.5);
     let ignored = vec![false; tris.polygon_count()];
-    let ctx = HitContext {
-        ray: WatertightRay::new(o, d).unwrap(),
-        ignored: &ignored,
-        faces: tris.polygon_faces(),
-        t_min: rays.near,
-        tie: rays.tie_rule(),
-    };
+    let ctx = rays
+        .context(0.5, 0.5, &ignored, tris.polygon_faces())
+        .unwrap();
     let out = grid.closest_hit(
         &tris,
         &ctx,
@@ -539,14 +529,14 @@ fn bvh_kernels_agree() {
         let mut hits = 0;
         for j in 0..vp.height {
             for i in 0..vp.width {
-                let (o, d) = rays.ray(f64::from(i) + 0.5, f64::from(j) + 0.5);
-                let ctx = HitContext {
-                    ray: WatertightRay::new(o, d).unwrap(),
-                    ignored: &ignored,
-                    faces: tris.polygon_faces(),
-                    t_min: rays.near,
-                    tie: rays.tie_rule(),
-                };
+                let ctx = rays
+                    .context(
+                        f64::from(i) + 0.5,
+                        f64::from(j) + 0.5,
+                        &ignored,
+                        tris.polygon_faces(),
+                    )
+                    .unwrap();
                 let (mut ca, mut cb) = (TraceCounters::default(), TraceCounters::default());
                 let a = bvh.closest_hit_with(Kernel::Auto, &ctx, rays.far, &mut stack, &mut ca);
                 let b = bvh.closest_hit_with(Kernel::Portable, &ctx, rays.far, &mut stack, &mut cb);

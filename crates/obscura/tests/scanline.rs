@@ -85,29 +85,35 @@ fn empty_culled_and_inside_views_are_background() {
     }
 }
 
+/// Polygons given in pixels (`x` right, `y` down, `z` toward the camera) seen by an
+/// orthographic camera that maps world units to the pixels of a `width x height` image:
+/// pixel (i, j) samples world (i + 0.5, height - j - 0.5).
+fn pixel_case(name: &str, polys: &[Vec<(f64, f64, f64)>], width: u64, height: u64) -> Case {
+    let (w, h) = (width as f64, height as f64);
+    let polys: Vec<Vec<DVec3>> = polys
+        .iter()
+        .map(|p| p.iter().map(|&(x, y, z)| DVec3::new(x, h - y, z)).collect())
+        .collect();
+    let cam = Camera::orthographic(
+        DVec3::new(w / 2.0, h / 2.0, 10.0),
+        DVec3::new(w / 2.0, h / 2.0, 0.0),
+        DVec3::Y,
+        h,
+        1.0,
+        20.0,
+    );
+    Case::new(name, scene_of(&polys), cam, width, height)
+}
+
 /// Face 0: the square (2,2)-(10,10) in pixels at z = 0. Face 1: the triangle
 /// (6,4) (14,4) (6,8) at z = 1, nearer. Both are seen by an orthographic camera that
 /// maps world units to pixels (pixel (i, j) samples world (i + 0.5, 12 - j - 0.5)).
 fn square_and_triangle() -> Case {
-    let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 12.0 - y, z);
-    let polys = vec![
-        vec![
-            flip(2., 2., 0.),
-            flip(10., 2., 0.),
-            flip(10., 10., 0.),
-            flip(2., 10., 0.),
-        ],
-        vec![flip(6., 4., 1.), flip(14., 4., 1.), flip(6., 8., 1.)],
+    let polys = [
+        vec![(2., 2., 0.), (10., 2., 0.), (10., 10., 0.), (2., 10., 0.)],
+        vec![(6., 4., 1.), (14., 4., 1.), (6., 8., 1.)],
     ];
-    let cam = Camera::orthographic(
-        DVec3::new(10.0, 6.0, 10.0),
-        DVec3::new(10.0, 6.0, 0.0),
-        DVec3::Y,
-        12.0,
-        1.0,
-        20.0,
-    );
-    Case::new("square and triangle", scene_of(&polys), cam, 20, 12)
+    pixel_case("square and triangle", &polys, 20, 12)
 }
 
 #[test]
@@ -237,25 +243,10 @@ fn coherence_skips_comparisons_on_repeated_rows() {
     // decided at their ends twice (first row, then the row that proves the order) and
     // reused on the 38 rows after; where face 0 leaves ({1,2}), face 2 stays the
     // nearest, kept from the span before without any comparison, on every row.
-    let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 48.0 - y, z);
-    let rect = |x0: f64, x1: f64, z: f64| {
-        vec![
-            flip(x0, 4., z),
-            flip(x1, 4., z),
-            flip(x1, 44., z),
-            flip(x0, 44., z),
-        ]
-    };
-    let polys = vec![rect(2., 30., 0.), rect(10., 40., 1.), rect(20., 50., 2.)];
-    let cam = Camera::orthographic(
-        DVec3::new(32.0, 24.0, 10.0),
-        DVec3::new(32.0, 24.0, 0.0),
-        DVec3::Y,
-        48.0,
-        1.0,
-        20.0,
-    );
-    let case = Case::new("stacked rectangles", scene_of(&polys), cam, 64, 48);
+    let rect =
+        |x0: f64, x1: f64, z: f64| vec![(x0, 4., z), (x1, 4., z), (x1, 44., z), (x0, 44., z)];
+    let polys = [rect(2., 30., 0.), rect(10., 40., 1.), rect(20., 50., 2.)];
+    let case = pixel_case("stacked rectangles", &polys, 64, 48);
     let stats = case.assert_matches_zbuffer(ALGO);
     // Per row: [10,20) {0,1}, [20,30) {0,1,2}, [30,40) {1,2}: three multi-face spans.
     assert_eq!(stats.get("spans_decided_at_ends"), Some(2.0 * 2.0));
@@ -274,30 +265,11 @@ fn coherence_skips_comparisons_on_repeated_rows() {
 fn coherence_is_not_used_when_faces_interpenetrate() {
     // Two rectangles over the same rows whose depths cross at x = 20: the order
     // changes inside the span, so it can never be reused.
-    let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 32.0 - y, z);
-    let polys = vec![
-        vec![
-            flip(4., 4., 0.),
-            flip(36., 4., 0.),
-            flip(36., 28., 0.),
-            flip(4., 28., 0.),
-        ],
-        vec![
-            flip(4., 4., -1.),
-            flip(36., 4., 1.),
-            flip(36., 28., 1.),
-            flip(4., 28., -1.),
-        ],
+    let polys = [
+        vec![(4., 4., 0.), (36., 4., 0.), (36., 28., 0.), (4., 28., 0.)],
+        vec![(4., 4., -1.), (36., 4., 1.), (36., 28., 1.), (4., 28., -1.)],
     ];
-    let cam = Camera::orthographic(
-        DVec3::new(20.0, 16.0, 10.0),
-        DVec3::new(20.0, 16.0, 0.0),
-        DVec3::Y,
-        32.0,
-        1.0,
-        20.0,
-    );
-    let case = Case::new("crossing rectangles", scene_of(&polys), cam, 40, 32);
+    let case = pixel_case("crossing rectangles", &polys, 40, 32);
     let stats = case.assert_matches_zbuffer(ALGO);
     assert_eq!(stats.get("spans_by_coherence"), Some(0.0));
     assert_eq!(stats.get("orders_proven"), Some(0.0));
@@ -315,25 +287,11 @@ fn a_face_hidden_over_its_whole_span_is_left_out_on_entering() {
     // square's span and ends before it: the square, kept as the nearest face, is
     // nearer at the triangle's first and last samples, so the triangle is left out
     // (two comparisons each time) and every span holds the square alone.
-    let flip = |x: f64, y: f64, z: f64| DVec3::new(x, 12.0 - y, z);
-    let polys = vec![
-        vec![
-            flip(2., 2., 1.),
-            flip(16., 2., 1.),
-            flip(16., 10., 1.),
-            flip(2., 10., 1.),
-        ],
-        vec![flip(6., 4., 0.), flip(14., 4., 0.), flip(6., 8., 0.)],
+    let polys = [
+        vec![(2., 2., 1.), (16., 2., 1.), (16., 10., 1.), (2., 10., 1.)],
+        vec![(6., 4., 0.), (14., 4., 0.), (6., 8., 0.)],
     ];
-    let cam = Camera::orthographic(
-        DVec3::new(10.0, 6.0, 10.0),
-        DVec3::new(10.0, 6.0, 0.0),
-        DVec3::Y,
-        12.0,
-        1.0,
-        20.0,
-    );
-    let case = Case::new("triangle behind a square", scene_of(&polys), cam, 20, 12);
+    let case = pixel_case("triangle behind a square", &polys, 20, 12);
     let stats = case.assert_matches_zbuffer(ALGO);
     assert_eq!(stats.get("faces_hidden_on_entering"), Some(4.0));
     assert_eq!(stats.get("depth_comparisons"), Some(8.0));
@@ -376,17 +334,8 @@ fn degenerate_polygons_are_skipped_without_panic() {
 #[test]
 fn a_single_face_is_drawn_without_any_depth_comparison() {
     // A triangle (2,1) (13,4) (5,10) in pixels: every span holds that one face.
-    let flip = |x: f64, y: f64| DVec3::new(x, 12.0 - y, 0.0);
-    let polys = vec![vec![flip(2.0, 1.0), flip(13.0, 4.0), flip(5.0, 10.0)]];
-    let cam = Camera::orthographic(
-        DVec3::new(8.0, 6.0, 10.0),
-        DVec3::new(8.0, 6.0, 0.0),
-        DVec3::Y,
-        12.0,
-        1.0,
-        20.0,
-    );
-    let case = Case::new("single triangle", scene_of(&polys), cam, 16, 12);
+    let polys = [vec![(2.0, 1.0, 0.0), (13.0, 4.0, 0.0), (5.0, 10.0, 0.0)]];
+    let case = pixel_case("single triangle", &polys, 16, 12);
     let stats = case.assert_matches_zbuffer(ALGO);
     // Rows 1..=9 (sample lines 1.5 .. 9.5) each hold one span of the triangle.
     assert_eq!(stats.get("spans"), Some(9.0));

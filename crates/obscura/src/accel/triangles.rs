@@ -248,6 +248,27 @@ impl PrimaryRays {
         self.ray_at(self.window_x(px), self.window_y(py))
     }
 
+    /// What a caster needs to trace the ray through image point `(px, py)`, between the
+    /// near plane and whatever `t_max` it is given, with these ignored polygons and
+    /// face ids; `None` for a ray [`WatertightRay::new`] refuses.
+    #[must_use]
+    pub fn context<'a>(
+        &self,
+        px: f64,
+        py: f64,
+        ignored: &'a [bool],
+        faces: &'a [u32],
+    ) -> Option<HitContext<'a>> {
+        let (origin, direction) = self.ray(px, py);
+        Some(HitContext {
+            ray: WatertightRay::new(origin, direction)?,
+            ignored,
+            faces,
+            t_min: self.near,
+            tie: self.tie_rule(),
+        })
+    }
+
     /// The window coordinate of image column `px` (`sx` of [`Camera::ray`]), so a
     /// caller can compute it once per column.
     #[inline]

@@ -170,31 +170,10 @@ pub fn triangle(
     width: u32,
     height: u32,
 ) -> Option<BlockSetup<3>> {
+    let (rect, area2) = super::setup::triangle_rect_and_area(p, width, height)?;
     let [a, b, c] = p;
-    let minx = a.0.min(b.0).min(c.0);
-    let maxx = a.0.max(b.0).max(c.0);
-    let miny = a.1.min(b.1).min(c.1);
-    let maxy = a.1.max(b.1).max(c.1);
-    if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
-        return None;
-    }
-    // sample_rect, with clamp written as max/min (equal for finite values).
-    let (w, h) = (f64::from(width), f64::from(height));
-    let rect = PixelRect {
-        x0: (minx - 0.5).ceil().max(0.0).min(w) as u32,
-        y0: (miny - 0.5).ceil().max(0.0).min(h) as u32,
-        x1: ((maxx - 0.5).floor() + 1.0).max(0.0).min(w) as u32,
-        y1: ((maxy - 0.5).floor() + 1.0).max(0.0).min(h) as u32,
-    };
-    if rect.is_empty() {
-        return None;
-    }
     let (ax, ay, az) = (b.0 - a.0, b.1 - a.1, b.2 - a.2);
     let (bx, by, bz) = (c.0 - a.0, c.1 - a.1, c.2 - a.2);
-    let area2 = ax * by - ay * bx;
-    if !(area2 != 0.0 && area2.is_finite()) {
-        return None;
-    }
     let area_sign = area2.signum();
     let inclusive = fill == FillRule::Inclusive;
     let e = [

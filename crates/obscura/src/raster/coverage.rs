@@ -224,62 +224,7 @@ impl PolygonCoverage {
     /// The covered pixels of row `j` as `[x0, x1)`, or `None` if none.
     #[must_use]
     pub fn row_span(&self, j: u32) -> Option<(u32, u32)> {
-        let r = self.rect;
-        if j < r.y0 || j >= r.y1 {
-            return None;
-        }
-        let py = f64::from(j) + 0.5;
-        let (mut lo, mut hi) = (i64::from(r.x0), i64::from(r.x1)); // half-open
-        for e in &self.edges {
-            let row = e.row_term(py);
-            let a = -e.sign * e.dy; // d(value)/d(px)
-            let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
-            if a == 0.0 {
-                if !inside(lo) {
-                    return None;
-                }
-                continue;
-            }
-            // Closed-form guess of the first (a > 0) or last (a < 0) inside pixel.
-            let cross = e.ox + row / e.dy;
-            let guess = if cross.is_finite() {
-                (cross - 0.5).ceil()
-            } else {
-                lo as f64
-            };
-            let g = guess.clamp(lo as f64 - 1.0, hi as f64 + 1.0) as i64;
-            if a > 0.0 {
-                // inside(i) is non-decreasing: find the first inside pixel in [lo, hi).
-                let mut i = g.clamp(lo, hi);
-                if i < hi && inside(i) {
-                    while i > lo && inside(i - 1) {
-                        i -= 1;
-                    }
-                } else {
-                    while i < hi && !inside(i) {
-                        i += 1;
-                    }
-                }
-                lo = i;
-            } else {
-                // inside(i) is non-increasing: find one past the last inside pixel.
-                let mut i = g.clamp(lo - 1, hi - 1);
-                if i >= lo && inside(i) {
-                    while i + 1 < hi && inside(i + 1) {
-                        i += 1;
-                    }
-                } else {
-                    while i >= lo && !inside(i) {
-                        i -= 1;
-                    }
-                }
-                hi = i + 1;
-            }
-            if lo >= hi {
-                return None;
-            }
-        }
-        Some((lo as u32, hi as u32))
+        super::row_span(&self.edges, self.rect, j, self.rect.x0, self.rect.x1)
     }
 
     /// Every non-empty row span as `(row, x0, x1)`, top to bottom.

@@ -333,6 +333,41 @@ fn triangle_edge(p: (f64, f64), q: (f64, f64), area_sign: f64, inclusive: bool) 
     }
 }
 
+/// The sample rectangle of the triangle `p` in a `width x height` image and twice its
+/// signed area (the area of [`PolygonCoverage::new`](super::PolygonCoverage::new) and
+/// the determinant of [`DepthPlane::from_points`], the same expression for a
+/// triangle); `None` when no sample is in its box or the area is zero or not finite.
+/// The triangle setups of the rasterizers share it.
+#[inline(always)]
+pub(crate) fn triangle_rect_and_area(
+    p: [(f64, f64, f64); 3],
+    width: u32,
+    height: u32,
+) -> Option<(PixelRect, f64)> {
+    let [a, b, c] = p;
+    let minx = a.0.min(b.0).min(c.0);
+    let maxx = a.0.max(b.0).max(c.0);
+    let miny = a.1.min(b.1).min(c.1);
+    let maxy = a.1.max(b.1).max(c.1);
+    // sample_rect, with clamp written as max/min (equal for the finite values that
+    // pass its check).
+    if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
+        return None;
+    }
+    let (w, h) = (f64::from(width), f64::from(height));
+    let rect = PixelRect {
+        x0: (minx - 0.5).ceil().max(0.0).min(w) as u32,
+        y0: (miny - 0.5).ceil().max(0.0).min(h) as u32,
+        x1: ((maxx - 0.5).floor() + 1.0).max(0.0).min(w) as u32,
+        y1: ((maxy - 0.5).floor() + 1.0).max(0.0).min(h) as u32,
+    };
+    if rect.is_empty() {
+        return None;
+    }
+    let area2 = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+    (area2 != 0.0 && area2.is_finite()).then_some((rect, area2))
+}
+
 impl TriangleSetup {
     /// Sets up the triangle `(x, y, zq)` for a `width x height` image; `None` exactly
     /// when [`PolygonCoverage::new`](super::PolygonCoverage::new) gives `None`.
@@ -342,34 +377,10 @@ impl TriangleSetup {
     #[inline(always)]
     #[must_use]
     pub fn new(p: [(f64, f64, f64); 3], fill: FillRule, width: u32, height: u32) -> Option<Self> {
+        let (rect, area2) = triangle_rect_and_area(p, width, height)?;
         let [a, b, c] = p;
-        let minx = a.0.min(b.0).min(c.0);
-        let maxx = a.0.max(b.0).max(c.0);
-        let miny = a.1.min(b.1).min(c.1);
-        let maxy = a.1.max(b.1).max(c.1);
-        // sample_rect, with clamp written as max/min (equal for the finite values
-        // that pass its check).
-        if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
-            return None;
-        }
-        let (w, h) = (f64::from(width), f64::from(height));
-        let rect = PixelRect {
-            x0: (minx - 0.5).ceil().max(0.0).min(w) as u32,
-            y0: (miny - 0.5).ceil().max(0.0).min(h) as u32,
-            x1: ((maxx - 0.5).floor() + 1.0).max(0.0).min(w) as u32,
-            y1: ((maxy - 0.5).floor() + 1.0).max(0.0).min(h) as u32,
-        };
-        if rect.is_empty() {
-            return None;
-        }
         let (ax, ay, az) = (b.0 - a.0, b.1 - a.1, b.2 - a.2);
         let (bx, by, bz) = (c.0 - a.0, c.1 - a.1, c.2 - a.2);
-        // The area of PolygonCoverage::new and the determinant of DepthPlane::from_points
-        // are the same expression for a triangle.
-        let area2 = ax * by - ay * bx;
-        if !(area2 != 0.0 && area2.is_finite()) {
-            return None;
-        }
         let area_sign = area2.signum();
         let inclusive = fill == FillRule::Inclusive;
         let edges = [

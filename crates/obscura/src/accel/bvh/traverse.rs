@@ -430,7 +430,7 @@ impl Bvh {
 mod tests {
     use super::*;
     use crate::accel::bvh::BvhOptions;
-    use crate::accel::triangles::{PrimaryRays, SceneTriangles, WatertightRay};
+    use crate::accel::triangles::{PrimaryRays, SceneTriangles};
     use crate::cull::backface::BackfaceMode;
     use crate::scene::{Viewport, demo};
 
@@ -489,14 +489,14 @@ mod tests {
         let mut hits = 0;
         for j in 0..vp.height {
             for i in 0..vp.width {
-                let (o, d) = rays.ray(f64::from(i) + 0.5, f64::from(j) + 0.5);
-                let ctx = HitContext {
-                    ray: WatertightRay::new(o, d).unwrap(),
-                    ignored: &ignored,
-                    faces: tris.polygon_faces(),
-                    t_min: rays.near,
-                    tie: rays.tie_rule(),
-                };
+                let ctx = rays
+                    .context(
+                        f64::from(i) + 0.5,
+                        f64::from(j) + 0.5,
+                        &ignored,
+                        tris.polygon_faces(),
+                    )
+                    .unwrap();
                 let mut brute = ClosestHit::new(rays.far);
                 for (t, &p) in tris.vertices().iter().zip(tris.triangle_polygons()) {
                     if !ignored[p as usize]
