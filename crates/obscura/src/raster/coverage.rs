@@ -160,6 +160,22 @@ pub struct PolygonCoverage {
     rect: PixelRect,
 }
 
+/// Twice the signed area of the polygon with `n >= 3` vertices `xy(0..n)`, summed over
+/// the fan from vertex 0 (the one order every setup of the coverage rule uses); `None`
+/// when it is zero or not finite.
+#[inline(always)]
+pub(crate) fn fan_area2(n: usize, xy: impl Fn(usize) -> (f64, f64)) -> Option<f64> {
+    let (x0, y0) = xy(0);
+    let mut area2 = 0.0;
+    for k in 1..n - 1 {
+        let ((px, py), (qx, qy)) = (xy(k), xy(k + 1));
+        let (ax, ay) = (px - x0, py - y0);
+        let (bx, by) = (qx - x0, qy - y0);
+        area2 += ax * by - ay * bx;
+    }
+    (area2 != 0.0 && area2.is_finite()).then_some(area2)
+}
+
 impl PolygonCoverage {
     /// Sets up a convex polygon (either winding) clipped to a `width x height` image.
     /// `None` when it has zero or non-finite area, or its box holds no sample.
@@ -169,17 +185,7 @@ impl PolygonCoverage {
         if n < 3 {
             return None;
         }
-        let (x0, y0) = points[0];
-        let mut area2 = 0.0;
-        for k in 1..n - 1 {
-            let (ax, ay) = (points[k].0 - x0, points[k].1 - y0);
-            let (bx, by) = (points[k + 1].0 - x0, points[k + 1].1 - y0);
-            area2 += ax * by - ay * bx;
-        }
-        if !(area2 != 0.0 && area2.is_finite()) {
-            return None;
-        }
-        let area_sign = area2.signum();
+        let area_sign = fan_area2(n, |k| points[k])?.signum();
         let mut edges = Vec::with_capacity(n);
         let (mut minx, mut miny, mut maxx, mut maxy) = (
             f64::INFINITY,

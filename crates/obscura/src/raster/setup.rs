@@ -119,17 +119,9 @@ impl<const N: usize> PolygonSetup<N> {
         let Some(rect) = sample_rect(minx, miny, maxx, maxy, width, height) else {
             return false;
         };
-        // Twice the signed area, summed over the fan in PolygonCoverage::new's order.
-        let (x0, y0) = (points[0].0, points[0].1);
-        let mut area2 = 0.0;
-        for k in 1..n - 1 {
-            let (ax, ay) = (points[k].0 - x0, points[k].1 - y0);
-            let (bx, by) = (points[k + 1].0 - x0, points[k + 1].1 - y0);
-            area2 += ax * by - ay * bx;
-        }
-        if !(area2 != 0.0 && area2.is_finite()) {
+        let Some(area2) = super::coverage::fan_area2(n, |k| (points[k].0, points[k].1)) else {
             return false;
-        }
+        };
         let area_sign = area2.signum();
         let mut count = 0;
         for k in 0..n {
@@ -364,8 +356,8 @@ pub(crate) fn triangle_rect_and_area(
     if rect.is_empty() {
         return None;
     }
-    let area2 = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
-    (area2 != 0.0 && area2.is_finite()).then_some((rect, area2))
+    let area2 = super::coverage::fan_area2(3, |k| (p[k].0, p[k].1))?;
+    Some((rect, area2))
 }
 
 impl TriangleSetup {
