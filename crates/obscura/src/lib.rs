@@ -35,7 +35,7 @@ pub mod cull;
 mod error;
 pub mod frame;
 pub mod geom;
-mod memory;
+pub mod memory;
 pub mod raster;
 pub mod scene;
 pub mod surface;

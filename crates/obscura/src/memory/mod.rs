@@ -16,8 +16,14 @@
 //!   get plain allocations. A huge page is reserved whole when any byte of it is
 //!   written, so the resident size may grow by up to 2 MiB per buffer.
 //! - Source: Linux `madvise(2)` and Documentation/admin-guide/mm/transhuge.rst.
+//!
+//! A program can go further and install [`HugePageAllocator`] as its global allocator:
+//! every large block then lies in whole huge pages, its ends included.
 
 use std::collections::TryReserveError;
+
+mod allocator;
+pub use allocator::{HugePageAllocator, LARGE};
 
 /// The size of a transparent huge page on x86-64 and most 64-bit Linux systems.
 pub(crate) const HUGE_PAGE: usize = 2 << 20;
@@ -112,13 +118,13 @@ mod tests {
     use super::*;
 
     /// Whether this system backs advised ranges with huge pages.
-    fn huge_pages_enabled() -> bool {
+    pub(super) fn huge_pages_enabled() -> bool {
         std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled")
             .is_ok_and(|s| s.contains("[madvise]") || s.contains("[always]"))
     }
 
     /// `AnonHugePages` of the mapping holding `addr`, in KiB, from `/proc/self/smaps`.
-    fn anon_huge_kib(addr: usize) -> Option<u64> {
+    pub(super) fn anon_huge_kib(addr: usize) -> Option<u64> {
         let text = std::fs::read_to_string("/proc/self/smaps").ok()?;
         let mut inside = false;
         for line in text.lines() {
