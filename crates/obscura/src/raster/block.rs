@@ -203,6 +203,173 @@ pub fn triangle(
     })
 }
 
+/// Eight triangles set up at once, lane by lane (see [`triangles8`]): each array holds
+/// one value per triangle.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleBatch {
+    /// Canonical edge origins, per edge.
+    pub ox: [[f64; 8]; 3],
+    /// Canonical edge origins, per edge.
+    pub oy: [[f64; 8]; 3],
+    /// `sign * dx`, per edge.
+    pub sdx: [[f64; 8]; 3],
+    /// `sign * dy`, per edge.
+    pub sdy: [[f64; 8]; 3],
+    /// The bound of the coverage test, per edge.
+    pub bound: [[f64; 8]; 3],
+    /// Sample rectangles: first columns.
+    pub x0: [u32; 8],
+    /// Sample rectangles: first rows.
+    pub y0: [u32; 8],
+    /// Sample rectangles: columns past the last.
+    pub x1: [u32; 8],
+    /// Sample rectangles: rows past the last.
+    pub y1: [u32; 8],
+    /// Keys at the first sample of the rectangles.
+    pub z0: [f64; 8],
+    /// Key changes per pixel to the right.
+    pub dzdx: [f64; 8],
+    /// Key changes per pixel down.
+    pub dzdy: [f64; 8],
+    /// The lanes whose triangle covers some sample (where [`triangle`] gives a setup).
+    pub valid: u8,
+}
+
+impl TriangleBatch {
+    /// The setup of lane `l` (`l < 8`): what [`triangle`] gives for that triangle
+    /// when the lane is valid.
+    #[inline(always)]
+    #[must_use]
+    pub fn get(&self, l: usize) -> BlockSetup<3> {
+        let l = l & 7;
+        BlockSetup {
+            ox: [self.ox[0][l], self.ox[1][l], self.ox[2][l]],
+            oy: [self.oy[0][l], self.oy[1][l], self.oy[2][l]],
+            sdx: [self.sdx[0][l], self.sdx[1][l], self.sdx[2][l]],
+            sdy: [self.sdy[0][l], self.sdy[1][l], self.sdy[2][l]],
+            bound: [self.bound[0][l], self.bound[1][l], self.bound[2][l]],
+            rect: PixelRect {
+                x0: self.x0[l],
+                y0: self.y0[l],
+                x1: self.x1[l],
+                y1: self.y1[l],
+            },
+            z0: self.z0[l],
+            dzdx: self.dzdx[l],
+            dzdy: self.dzdy[l],
+        }
+    }
+}
+
+/// The vertices of eight triangles, lane by lane: `x[v][l]` is the x of vertex `v` of
+/// triangle `l` (likewise `y` and the depth key `zq`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TrianglePoints {
+    /// Screen x per vertex, per triangle.
+    pub x: [[f64; 8]; 3],
+    /// Screen y per vertex, per triangle.
+    pub y: [[f64; 8]; 3],
+    /// Depth key per vertex, per triangle.
+    pub zq: [[f64; 8]; 3],
+}
+
+/// Applies `f` to each lane: written as loops over fixed-size arrays so that the
+/// compiler turns each into vector instructions of the caller's instruction set.
+#[inline(always)]
+fn lanes<T: Copy + Default>(f: impl Fn(usize) -> T) -> [T; 8] {
+    let mut o = [T::default(); 8];
+    for (l, o) in o.iter_mut().enumerate() {
+        *o = f(l);
+    }
+    o
+}
+
+/// [`triangle`] for eight triangles at once: lane `l` of the result holds what
+/// `triangle` gives for triangle `l` (bit for bit: each lane evaluates the same
+/// expressions in the same order), and is valid exactly when `triangle` gives a setup.
+/// Straight-line code over lanes, without a branch per triangle: the compiler
+/// vectorizes it, about three times cheaper per triangle than [`triangle`].
+#[inline(always)]
+#[must_use]
+pub fn triangles8(p: &TrianglePoints, fill: FillRule, width: u32, height: u32) -> TriangleBatch {
+    let (x, y, zq) = (&p.x, &p.y, &p.zq);
+    // triangle_rect_and_area
+    let minx = lanes(|l| x[0][l].min(x[1][l]).min(x[2][l]));
+    let maxx = lanes(|l| x[0][l].max(x[1][l]).max(x[2][l]));
+    let miny = lanes(|l| y[0][l].min(y[1][l]).min(y[2][l]));
+    let maxy = lanes(|l| y[0][l].max(y[1][l]).max(y[2][l]));
+    let (w, h) = (f64::from(width), f64::from(height));
+    let x0 = lanes(|l| (minx[l] - 0.5).ceil().max(0.0).min(w) as u32);
+    let y0 = lanes(|l| (miny[l] - 0.5).ceil().max(0.0).min(h) as u32);
+    let x1 = lanes(|l| ((maxx[l] - 0.5).floor() + 1.0).max(0.0).min(w) as u32);
+    let y1 = lanes(|l| ((maxy[l] - 0.5).floor() + 1.0).max(0.0).min(h) as u32);
+    // The fan area from vertex 0, as `coverage::fan_area2` sums it.
+    let ax = lanes(|l| x[1][l] - x[0][l]);
+    let ay = lanes(|l| y[1][l] - y[0][l]);
+    let az = lanes(|l| zq[1][l] - zq[0][l]);
+    let bx = lanes(|l| x[2][l] - x[0][l]);
+    let by = lanes(|l| y[2][l] - y[0][l]);
+    let bz = lanes(|l| zq[2][l] - zq[0][l]);
+    let area2 = lanes(|l| 0.0 + (ax[l] * by[l] - ay[l] * bx[l]));
+    let ok = lanes(|l| {
+        let finite =
+            minx[l].is_finite() & miny[l].is_finite() & maxx[l].is_finite() & maxy[l].is_finite();
+        finite & (x0[l] < x1[l]) & (y0[l] < y1[l]) & (area2[l] != 0.0) & area2[l].is_finite()
+    });
+    let valid = ok
+        .iter()
+        .enumerate()
+        .fold(0u8, |m, (l, &v)| m | (u8::from(v) << l));
+    // triangle: the edges as `triangle_edge` orients them.
+    let area_sign = lanes(|l| area2[l].signum());
+    let inclusive = fill == FillRule::Inclusive;
+    let mut batch = TriangleBatch {
+        ox: [[0.0; 8]; 3],
+        oy: [[0.0; 8]; 3],
+        sdx: [[0.0; 8]; 3],
+        sdy: [[0.0; 8]; 3],
+        bound: [[0.0; 8]; 3],
+        x0,
+        y0,
+        x1,
+        y1,
+        z0: [0.0; 8],
+        dzdx: [0.0; 8],
+        dzdy: [0.0; 8],
+        valid,
+    };
+    for (k, (i, j)) in [(0, 1), (1, 2), (2, 0)].into_iter().enumerate() {
+        // `|` and `&`, not `||` and `&&`: no branch, so the lanes stay vectors.
+        let less = lanes(|l| (y[i][l] < y[j][l]) | ((y[i][l] == y[j][l]) & (x[i][l] < x[j][l])));
+        let (ox, oy) = (
+            lanes(|l| if less[l] { x[i][l] } else { x[j][l] }),
+            lanes(|l| if less[l] { y[i][l] } else { y[j][l] }),
+        );
+        let (ex, ey) = (
+            lanes(|l| if less[l] { x[j][l] } else { x[i][l] }),
+            lanes(|l| if less[l] { y[j][l] } else { y[i][l] }),
+        );
+        let sign = lanes(|l| if less[l] { area_sign[l] } else { -area_sign[l] });
+        let sdx = lanes(|l| (ex[l] - ox[l]) * sign[l]);
+        let sdy = lanes(|l| (ey[l] - oy[l]) * sign[l]);
+        batch.bound[k] = lanes(|l| {
+            let top_left = ((sdy[l] == 0.0) & (sdx[l] > 0.0)) | (sdy[l] < 0.0);
+            bound_of(inclusive | top_left)
+        });
+        (batch.ox[k], batch.oy[k], batch.sdx[k], batch.sdy[k]) = (ox, oy, sdx, sdy);
+    }
+    // The plane, with one division, and its key at the rectangle's first sample
+    // (`DepthPlane::at`).
+    let inv = lanes(|l| 1.0 / area2[l]);
+    batch.dzdx = lanes(|l| (az[l] * by[l] - bz[l] * ay[l]) * inv[l]);
+    batch.dzdy = lanes(|l| (ax[l] * bz[l] - bx[l] * az[l]) * inv[l]);
+    batch.z0 = lanes(|l| {
+        let (px, py) = (f64::from(x0[l]) + 0.5, f64::from(y0[l]) + 0.5);
+        zq[0][l] + batch.dzdx[l] * (px - x[0][l]) + batch.dzdy[l] * (py - y[0][l])
+    });
+    batch
+}
+
 /// Pixels tested (covered) and taken by a drawing.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counts {
@@ -752,6 +919,94 @@ pub fn resolve<L: Lanes>(
 mod tests {
     use super::*;
     use crate::scene::demo::SplitMix64;
+
+    /// The bits of a setup, for comparisons that tell `-0.0` from `0.0` and accept
+    /// equal NaNs.
+    fn setup_bits(s: &BlockSetup<3>) -> Vec<u64> {
+        let mut v: Vec<u64> = [s.ox, s.oy, s.sdx, s.sdy, s.bound]
+            .iter()
+            .flatten()
+            .map(|x| x.to_bits())
+            .collect();
+        v.extend([s.z0, s.dzdx, s.dzdy].map(f64::to_bits));
+        v.extend([s.rect.x0, s.rect.y0, s.rect.x1, s.rect.y1].map(u64::from));
+        v
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+    fn triangles8_avx512(p: &TrianglePoints, fill: FillRule, w: u32, h: u32) -> TriangleBatch {
+        triangles8(p, fill, w, h)
+    }
+
+    /// A random triangle of one of the kinds the setups must agree on.
+    fn random_triangle(rng: &mut SplitMix64) -> [(f64, f64, f64); 3] {
+        let kind = rng.next_u64() % 8;
+        let scale = [0.3, 2.0, 9.0, 40.0, 300.0, 1e-6, 5e8, 4.0][kind as usize];
+        let (cx, cy) = (rng.range(-20.0, 140.0), rng.range(-20.0, 100.0));
+        let mut p = [(0.0, 0.0, 0.0); 3];
+        for q in &mut p {
+            *q = (
+                cx + rng.range(-1.0, 1.0) * scale,
+                cy + rng.range(-1.0, 1.0) * scale,
+                rng.range(0.001, 1.0),
+            );
+            if kind == 7 {
+                // On the pixel-centre grid and its lines: ties on edges and samples.
+                *q = ((q.0 * 2.0).round() / 2.0, (q.1 * 2.0).round() / 2.0, q.2);
+            }
+        }
+        match rng.next_u64() % 16 {
+            0 => p[2] = p[0], // two equal points: no area
+            1 => p[2] = (2.0 * p[1].0 - p[0].0, 2.0 * p[1].1 - p[0].1, p[2].2), // collinear
+            2 => p[1].0 = f64::NAN,
+            3 => p[2].1 = f64::INFINITY,
+            4 => p[0].2 = f64::NAN, // a non-finite depth
+            5 => p[1].1 = p[0].1,   // a horizontal edge
+            _ => {}
+        }
+        p
+    }
+
+    #[test]
+    fn eight_triangles_at_once_are_set_up_as_one_at_a_time() {
+        let mut rng = SplitMix64(41);
+        let (w, h) = (120, 80);
+        let mut valid = 0;
+        for _ in 0..4000 {
+            let tris: Vec<_> = (0..8).map(|_| random_triangle(&mut rng)).collect();
+            let mut pts = TrianglePoints::default();
+            for (l, t) in tris.iter().enumerate() {
+                for (v, q) in t.iter().enumerate() {
+                    (pts.x[v][l], pts.y[v][l], pts.zq[v][l]) = *q;
+                }
+            }
+            for fill in [FillRule::TopLeft, FillRule::Inclusive] {
+                let mut batches = vec![triangles8(&pts, fill, w, h)];
+                #[cfg(target_arch = "x86_64")]
+                if std::arch::is_x86_feature_detected!("avx512f")
+                    && std::arch::is_x86_feature_detected!("avx512vl")
+                    && std::arch::is_x86_feature_detected!("avx512bw")
+                    && std::arch::is_x86_feature_detected!("avx512dq")
+                {
+                    // SAFETY: the features were just detected.
+                    batches.push(unsafe { triangles8_avx512(&pts, fill, w, h) });
+                }
+                for batch in &batches {
+                    for (l, t) in tris.iter().enumerate() {
+                        let one = triangle(*t, fill, w, h);
+                        assert_eq!(batch.valid >> l & 1 == 1, one.is_some(), "{t:?}");
+                        if let Some(one) = one {
+                            valid += 1;
+                            assert_eq!(setup_bits(&batch.get(l)), setup_bits(&one), "{t:?}");
+                        }
+                    }
+                }
+            }
+        }
+        // Most random triangles are valid; the special kinds make the rest.
+        assert!(valid > 20_000, "{valid}");
+    }
 
     #[test]
     fn nearest_key_bounds_every_key_of_the_rectangle() {

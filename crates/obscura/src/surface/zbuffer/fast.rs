@@ -304,65 +304,98 @@ fn draw_band_impl<L: Lanes>(
     let mut scratch = PolygonSetup::<16>::new();
     let mut counts = Counts::default();
     let mut drawn = 0u64;
-    for p in polygons {
-        let (a, b) = (starts[p] as usize, starts[p + 1] as usize);
-        if let &[i, j, k] = &indices[a..b] {
-            // Triangles, most polygons of most scenes: set up and drawn without the
-            // general path's enum.
-            let point = |i: u32| {
-                let v = &vertices[i as usize];
-                (v.x, v.y, v.zq)
-            };
-            let Some(t) = block::triangle([point(i), point(j), point(k)], fill, width, height)
-            else {
-                continue;
-            };
-            let rect = t.rect;
+    // Triangles, most polygons of most scenes, are set up eight at a time (the other
+    // polygons one by one as they come: the order-free depth test makes the order of
+    // drawing irrelevant).
+    let mut points = block::TrianglePoints::default();
+    let mut batch_polygons = [0usize; 8];
+    let mut batched = 0;
+    let mut polygons = polygons.into_iter();
+    loop {
+        let next = polygons.next();
+        let mut other = None;
+        if let Some(p) = next {
+            let (a, b) = (starts[p] as usize, starts[p + 1] as usize);
+            if let &[i, j, k] = &indices[a..b] {
+                for (v, q) in [i, j, k].into_iter().enumerate() {
+                    let q = &vertices[q as usize];
+                    (
+                        points.x[v][batched],
+                        points.y[v][batched],
+                        points.zq[v][batched],
+                    ) = (q.x, q.y, q.zq);
+                }
+                batch_polygons[batched] = p;
+                batched += 1;
+                if batched < 8 {
+                    continue;
+                }
+            } else {
+                other = Some(p);
+            }
+        }
+        // A full batch, the last one, or the triangles before another polygon (so
+        // that polygons are drawn in their order: the counts of pixels written
+        // depend on it).
+        if batched > 0 {
+            // Lanes past `batched` hold earlier triangles again: they are not drawn.
+            let batch = block::triangles8(&points, fill, width, height);
+            for (lane, &p) in batch_polygons[..batched].iter().enumerate() {
+                if batch.valid >> lane & 1 == 0 {
+                    continue;
+                }
+                let t = batch.get(lane);
+                let rect = t.rect;
+                if rect.y0 >= y0 && rect.y0 < y1 {
+                    drawn += 1;
+                }
+                if rect.y1 <= y0 || rect.y0 >= y1 {
+                    continue;
+                }
+                let face = !faces[p];
+                if is_big(rect) {
+                    let n = big_triangles.len() as u32;
+                    big_triangles.push((t, face, block::nearest_key(&t, rect)));
+                    let (xs, ys) = tiles_of(rect);
+                    for ty in ys {
+                        for bin in &mut bins[ty * tiles_x..][xs.clone()] {
+                            bin.push(n);
+                        }
+                    }
+                } else {
+                    block::draw(l, &t, whole, Align::Polygon, &mut target, face, &mut counts);
+                }
+            }
+            batched = 0;
+        }
+        // Other polygons, one by one.
+        if let Some(p) = other
+            && let Some(s) = setup(view, p, fill, width, height, &mut scratch)
+        {
+            let rect = s.rect();
+            // A polygon reaching several bands is counted by the band of its first row.
             if rect.y0 >= y0 && rect.y0 < y1 {
                 drawn += 1;
             }
-            if rect.y1 <= y0 || rect.y0 >= y1 {
-                continue;
-            }
-            let face = !faces[p];
-            if is_big(rect) {
-                let n = big_triangles.len() as u32;
-                big_triangles.push((t, face, block::nearest_key(&t, rect)));
-                let (xs, ys) = tiles_of(rect);
-                for ty in ys {
-                    for bin in &mut bins[ty * tiles_x..][xs.clone()] {
-                        bin.push(n);
+            if rect.y1 > y0 && rect.y0 < y1 {
+                let face = !faces[p];
+                if is_big(rect) {
+                    let n = OTHER | big.len() as u32;
+                    let near = s.nearest_key();
+                    big.push((s, face, near));
+                    let (xs, ys) = tiles_of(rect);
+                    for ty in ys {
+                        for bin in &mut bins[ty * tiles_x..][xs.clone()] {
+                            bin.push(n);
+                        }
                     }
-                }
-            } else {
-                block::draw(l, &t, whole, Align::Polygon, &mut target, face, &mut counts);
-            }
-            continue;
-        }
-        let Some(s) = setup(view, p, fill, width, height, &mut scratch) else {
-            continue;
-        };
-        let rect = s.rect();
-        // A polygon reaching several bands is counted by the band of its first row.
-        if rect.y0 >= y0 && rect.y0 < y1 {
-            drawn += 1;
-        }
-        if rect.y1 <= y0 || rect.y0 >= y1 {
-            continue;
-        }
-        let face = !faces[p];
-        if is_big(rect) {
-            let n = OTHER | big.len() as u32;
-            let near = s.nearest_key();
-            big.push((s, face, near));
-            let (xs, ys) = tiles_of(rect);
-            for ty in ys {
-                for bin in &mut bins[ty * tiles_x..][xs.clone()] {
-                    bin.push(n);
+                } else {
+                    draw_setup(l, &s, whole, Align::Polygon, &mut target, face, &mut counts);
                 }
             }
-        } else {
-            draw_setup(l, &s, whole, Align::Polygon, &mut target, face, &mut counts);
+        }
+        if next.is_none() {
+            break;
         }
     }
     let depth = depth_of_key(view.transform());
