@@ -10,7 +10,8 @@
 //! - What it does: blocks of at least [`LARGE`] bytes are mapped directly from the
 //!   kernel at a 2 MiB-aligned address, their length rounded up to whole 2 MiB pages,
 //!   and advised with `MADV_HUGEPAGE`, so that every page of the block can be huge.
-//!   Growing such a block moves its pages (`mremap`) instead of copying them. Smaller
+//!   Growing such a block moves its pages (`mremap`) to a new aligned place instead
+//!   of copying them. Smaller
 //!   blocks, and every block on systems other than Linux, go to [`System`].
 //! - Cost: one `mmap` (and up to two `munmap`s of the alignment slack) per large
 //!   block; the kernel zeroes each huge page on its first write (a 2 MiB clear, about
@@ -30,8 +31,9 @@ use std::alloc::{GlobalAlloc, Layout, System};
 
 use super::HUGE_PAGE;
 
-/// Blocks of at least this many bytes are mapped in huge pages.
-pub const LARGE: usize = 4 << 20;
+/// Blocks of at least this many bytes are mapped in huge pages: from 1 MiB, one huge
+/// page (a 2 MiB clear) costs less than the 256 small-page faults it replaces.
+pub const LARGE: usize = 1 << 20;
 
 /// The global allocator of the module doc: large blocks in whole 2 MiB pages, the rest
 /// from the system allocator.
@@ -51,8 +53,7 @@ pub const LARGE: usize = 4 << 20;
 #[derive(Clone, Copy, Debug, Default)]
 pub struct HugePageAllocator;
 
-/// The largest alignment of a mapped block: a moved mapping (`mremap`) keeps only the
-/// alignment of a small page.
+/// The largest alignment of a mapped block (more goes to [`System`]).
 const MAPPED_ALIGN: usize = 4096;
 
 /// Whether a block of this layout is mapped (rather than given to [`System`]).
@@ -71,8 +72,8 @@ fn mapped_len(size: usize) -> Option<usize> {
 // their layouts) or a private anonymous mapping of `mapped_len(size)` bytes at a
 // 2 MiB-aligned address (large ones), which `is_mapped` tells apart from the layout
 // alone, as `GlobalAlloc` guarantees the same layout at `dealloc` and `realloc`.
-// Mappings are readable, writable, zeroed, and aligned to a small page at least (2 MiB
-// when made, 4 KiB after a move), which is the largest alignment `is_mapped` accepts.
+// Mappings are readable, writable, zeroed, and aligned to 2 MiB, more than the largest
+// alignment `is_mapped` accepts.
 unsafe impl GlobalAlloc for HugePageAllocator {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         if is_mapped(layout.size(), layout.align()) {
@@ -180,7 +181,10 @@ unsafe fn unmap(ptr: *mut u8, size: usize) {
 }
 
 /// Grows or shrinks a block made by [`map`] for `old` bytes to `new` bytes (both
-/// mapped sizes), moving its pages; null on failure (the block is then unchanged).
+/// mapped sizes), keeping it on a 2 MiB boundary; null on failure (the block is then
+/// unchanged). A shrinking block keeps its place; a growing one has its pages moved
+/// (not copied) to a fresh aligned mapping: a move the kernel placed itself would
+/// lose the alignment, and with it the huge pages at the block's ends.
 ///
 /// # Safety
 /// `ptr` is such a block.
@@ -192,11 +196,32 @@ unsafe fn remap(ptr: *mut u8, old: usize, new: usize) -> *mut u8 {
     if old_len == new_len {
         return ptr;
     }
-    // SAFETY: `ptr` is a whole mapping of `old_len` bytes (the caller's contract);
-    // MREMAP_MAYMOVE keeps its contents, and new pages read as zero.
+    // SAFETY: `ptr` is a whole mapping of `old_len` bytes (the caller's contract).
+    // Shrinking in place keeps its first `new_len` bytes. Moving with MREMAP_FIXED
+    // replaces the fresh mapping `target` (ours, used by nobody) with the block's
+    // pages, their contents kept, the rest of the new length reading as zero.
     unsafe {
-        let p = libc::mremap(ptr.cast(), old_len, new_len, libc::MREMAP_MAYMOVE);
+        if new_len < old_len {
+            let p = libc::mremap(ptr.cast(), old_len, new_len, 0);
+            return if p == libc::MAP_FAILED {
+                std::ptr::null_mut()
+            } else {
+                p.cast()
+            };
+        }
+        let target = map(new);
+        if target.is_null() {
+            return target;
+        }
+        let p = libc::mremap(
+            ptr.cast(),
+            old_len,
+            new_len,
+            libc::MREMAP_MAYMOVE | libc::MREMAP_FIXED,
+            target.cast::<libc::c_void>(),
+        );
         if p == libc::MAP_FAILED {
+            libc::munmap(target.cast(), new_len);
             return std::ptr::null_mut();
         }
         libc::madvise(p, new_len, libc::MADV_HUGEPAGE);
@@ -256,6 +281,10 @@ mod tests {
                 p = a.realloc(p, layout, new);
                 assert!(!p.is_null());
                 assert_eq!(p as usize % align, 0);
+                if is_mapped(new, align) {
+                    // Moved or not, a mapped block stays on a huge page boundary.
+                    assert_eq!(p as usize % HUGE_PAGE, 0);
+                }
                 let keep = layout.size().min(new);
                 let bytes = std::slice::from_raw_parts_mut(p, new);
                 assert!(
