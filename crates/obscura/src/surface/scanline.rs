@@ -280,7 +280,9 @@ fn run(
     trace_rows: Range<u32>,
 ) -> Result<(Frame, Stats, Vec<RowTrace>)> {
     let vp = view.viewport();
-    let frame = Frame::new(vp)?;
+    // Zero bits, not background: the pages are first written where spans are drawn,
+    // and ids are stored complemented (0 is "nothing drawn") until `keys_to_depths`.
+    let frame = Frame::zeroed(vp)?;
     let start = std::time::Instant::now();
     let table = EdgeTable::build(view, vp.width, vp.height);
     let table_seconds = start.elapsed().as_secs_f64();
@@ -359,8 +361,8 @@ fn run(
 }
 
 /// Writes the face with id `face` and depth-key plane `plane` to pixels `x0..x1` of
-/// row `y`: its id, and its stored (`f32`) key stepped along the row as the seeds do,
-/// re-anchored per run, in the depth array until [`keys_to_depths`].
+/// row `y`: its id complemented, and its stored (`f32`) key stepped along the row as
+/// the seeds do, re-anchored per run, in the depth array until [`keys_to_depths`].
 #[inline]
 fn fill_keys(frame: &mut Frame, y: u32, x0: u32, x1: u32, plane: &DepthPlane, face: u32) {
     let row = y as usize * frame.width as usize;
@@ -369,20 +371,23 @@ fn fill_keys(frame: &mut Frame, y: u32, x0: u32, x1: u32, plane: &DepthPlane, fa
     // One scalar loop: spans are a few pixels long, where a vectorised fill costs
     // more in set-up than it saves.
     for (id, d) in frame.ids[a..b].iter_mut().zip(&mut frame.depth[a..b]) {
-        *id = face;
+        *id = !face;
         *d = z as f32;
         z += plane.dzdx;
     }
 }
 
-/// Turns the stored keys of the drawn pixels into eye-space depths, in one pass at the
-/// end rather than a division per pixel while spans are drawn. Every pixel's depth is
-/// computed and the background's discarded by a select, without a branch: the loop
-/// then runs on vector lanes.
+/// Turns the stored keys and complemented ids into eye-space depths and face ids, in
+/// one pass at the end rather than a division per pixel while spans are drawn: where
+/// the id is 0 (no face drawn) the background (`+inf`, [`BACKGROUND`]). Every pixel's
+/// depth is computed and the background's discarded by a select, without a branch:
+/// the loop then runs on vector lanes.
 fn keys_to_depths(frame: &mut Frame, t: &ViewTransform) {
-    for (d, &id) in frame.depth.iter_mut().zip(&frame.ids) {
+    for (d, id) in frame.depth.iter_mut().zip(&mut frame.ids) {
         let depth = t.depth_of_zq(f64::from(*d)) as f32;
-        *d = if id != BACKGROUND { depth } else { *d };
+        let drawn = *id != 0;
+        *d = if drawn { depth } else { f32::INFINITY };
+        *id = if drawn { !*id } else { BACKGROUND };
     }
 }
 
@@ -873,7 +878,7 @@ impl Scanner<'_> {
             }
             self.counters.comparisons += k - 1;
             let k = self.frame.index(x, y);
-            self.frame.ids[k] = best.face;
+            self.frame.ids[k] = !best.face;
             self.frame.depth[k] = best_key;
         }
         SpanDecision::PerPixel
