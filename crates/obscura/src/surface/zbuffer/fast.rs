@@ -2,8 +2,8 @@
 //! of the frame, with the block rasterizer ([`crate::raster::block`]) compiled for the
 //! processor's vector extensions.
 //!
-//! Per band, one pass over its polygons: each is set up once; a small one is drawn at
-//! once, a big one (wider or taller than [`BIG`] pixels) is put in the bins of the
+//! Per band, one pass over its polygons: each is set up once (consecutive triangles
+//! eight at a time, [`block::triangles8`]); a small one is drawn at once, a big one (wider or taller than [`BIG`] pixels) is put in the bins of the
 //! 64x64 tiles it overlaps. Then each tile draws its big polygons while its keys and ids
 //! (32 KiB) stay in the first-level cache, nearest first, skipping the blocks that hide
 //! them (see [`crate::raster::block::BlockTarget::with_farthest`]), and turns its keys
