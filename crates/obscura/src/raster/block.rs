@@ -137,25 +137,6 @@ impl<const E: usize> BlockSetup<E> {
     }
 }
 
-/// The edge `p -> q` of a triangle whose signed area has sign `area_sign`, as
-/// [`EdgeFunction::new`] orients it: `(ox, oy, sdx, sdy, bound)`. `p` and `q` are
-/// distinct (the area is not zero).
-#[inline(always)]
-fn triangle_edge(
-    p: (f64, f64),
-    q: (f64, f64),
-    area_sign: f64,
-    inclusive: bool,
-) -> (f64, f64, f64, f64, f64) {
-    let less = p.1 < q.1 || (p.1 == q.1 && p.0 < q.0);
-    let (o, e) = if less { (p, q) } else { (q, p) };
-    let sign = if less { area_sign } else { -area_sign };
-    let (sdx, sdy) = ((e.0 - o.0) * sign, (e.1 - o.1) * sign);
-    // Top edge (horizontal, interior below) or left edge: its samples are inside.
-    let top_left = (sdy == 0.0 && sdx > 0.0) || sdy < 0.0;
-    (o.0, o.1, sdx, sdy, bound_of(inclusive || top_left))
-}
-
 /// The setup of the triangle with vertices `(x, y, zq)` for a `width x height` image:
 /// the edges and rectangle of [`PolygonCoverage::new`](super::PolygonCoverage::new) and
 /// the plane of [`DepthPlane::from_points`] (what
@@ -170,37 +151,18 @@ pub fn triangle(
     width: u32,
     height: u32,
 ) -> Option<BlockSetup<3>> {
-    let (rect, area2) = super::setup::triangle_rect_and_area(p, width, height)?;
+    let t = super::TriangleSetup::new(p, fill, width, height)?;
+    // One division: the plane need not be DepthPlane::from_points' to the last bit.
     let [a, b, c] = p;
     let (ax, ay, az) = (b.0 - a.0, b.1 - a.1, b.2 - a.2);
     let (bx, by, bz) = (c.0 - a.0, c.1 - a.1, c.2 - a.2);
-    let area_sign = area2.signum();
-    let inclusive = fill == FillRule::Inclusive;
-    let e = [
-        triangle_edge((a.0, a.1), (b.0, b.1), area_sign, inclusive),
-        triangle_edge((b.0, b.1), (c.0, c.1), area_sign, inclusive),
-        triangle_edge((c.0, c.1), (a.0, a.1), area_sign, inclusive),
-    ];
-    // One division: the plane need not be DepthPlane::from_points' to the last bit.
-    let inv = 1.0 / area2;
+    let inv = 1.0 / (0.0 + (ax * by - ay * bx));
     let plane = DepthPlane {
-        x0: a.0,
-        y0: a.1,
-        z0: a.2,
         dzdx: (az * by - bz * ay) * inv,
         dzdy: (ax * bz - bx * az) * inv,
+        ..t.plane
     };
-    Some(BlockSetup {
-        ox: e.map(|e| e.0),
-        oy: e.map(|e| e.1),
-        sdx: e.map(|e| e.2),
-        sdy: e.map(|e| e.3),
-        bound: e.map(|e| e.4),
-        rect,
-        z0: plane.at(f64::from(rect.x0) + 0.5, f64::from(rect.y0) + 0.5),
-        dzdx: plane.dzdx,
-        dzdy: plane.dzdy,
-    })
+    BlockSetup::new(&t.edges, t.rect, &plane)
 }
 
 /// Eight triangles set up at once, lane by lane (see [`triangles8`]): each array holds
@@ -795,28 +757,8 @@ fn draw_block<L: Lanes, const E: usize, const WIDE: bool>(
         for &zj in &zr[first..last] {
             // SAFETY: the pixels of `lanes` in this row are inside the slices (checked
             // above for the farthest row).
-            let taken = unsafe {
-                if WIDE {
-                    l.depth_test16(
-                        keys,
-                        ids,
-                        at,
-                        lanes,
-                        l.add_scalar(zc_lo, zj),
-                        l.add_scalar(zc_hi, zj),
-                        face,
-                    )
-                } else {
-                    u16::from(l.depth_test8(
-                        keys,
-                        ids,
-                        at,
-                        lanes as u8,
-                        l.add_scalar(zc_lo, zj),
-                        face,
-                    ))
-                }
-            };
+            let taken =
+                unsafe { test_row::<L, WIDE>(l, keys, ids, at, lanes, [zc_lo, zc_hi], zj, face) };
             counts.written += u64::from(taken.count_ones());
             at += stride;
         }
@@ -860,24 +802,40 @@ fn draw_block<L: Lanes, const E: usize, const WIDE: bool>(
             let zj = zr[j];
             // SAFETY: `cover` is within `lanes`, whose pixels in this row are inside the
             // slices (checked above for the farthest row).
-            let taken = unsafe {
-                if WIDE {
-                    l.depth_test16(
-                        keys,
-                        ids,
-                        at,
-                        cover,
-                        l.add_scalar(zc_lo, zj),
-                        l.add_scalar(zc_hi, zj),
-                        face,
-                    )
-                } else {
-                    u16::from(l.depth_test8(keys, ids, at, lo, l.add_scalar(zc_lo, zj), face))
-                }
-            };
+            let taken =
+                unsafe { test_row::<L, WIDE>(l, keys, ids, at, cover, [zc_lo, zc_hi], zj, face) };
             counts.written += u64::from(taken.count_ones());
         }
         at += stride;
+    }
+}
+
+/// Depth-tests the pixels `cover` of one row of a block at `at` (16 lanes when `WIDE`,
+/// else the low 8), their keys the column parts `zc` (lanes 0-7, 8-15) plus the row's
+/// part `zj`; returns the pixels taken.
+///
+/// # Safety
+/// The pixels of `cover` in this row are inside the slices.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn test_row<L: Lanes, const WIDE: bool>(
+    l: L,
+    keys: &mut [f32],
+    ids: &mut [u32],
+    at: usize,
+    cover: u16,
+    zc: [L::F; 2],
+    zj: f64,
+    face: u32,
+) -> u16 {
+    let lo = l.add_scalar(zc[0], zj);
+    // SAFETY: the caller's contract.
+    unsafe {
+        if WIDE {
+            l.depth_test16(keys, ids, at, cover, lo, l.add_scalar(zc[1], zj), face)
+        } else {
+            u16::from(l.depth_test8(keys, ids, at, cover as u8, lo, face))
+        }
     }
 }
 

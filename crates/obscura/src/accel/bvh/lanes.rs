@@ -23,6 +23,31 @@ use super::traverse::{max, min};
 use super::{BvhNode, WIDTH};
 use crate::accel::triangles::AxisOrder;
 
+/// `op` over the lanes of `values` in `mask` (`empty` for the others), by halving:
+/// the order of a vector reduction, so that the compiler keeps it in vectors.
+#[inline(always)]
+fn reduce_masked(
+    values: &[f32; PACKET],
+    mask: Mask,
+    empty: f32,
+    op: impl Fn(f32, f32) -> f32,
+) -> f32 {
+    let mut v = [empty; PACKET];
+    for r in 0..PACKET {
+        if mask >> r & 1 != 0 {
+            v[r] = values[r];
+        }
+    }
+    let mut width = PACKET / 2;
+    while width > 0 {
+        for r in 0..width {
+            v[r] = op(v[r], v[r + width]);
+        }
+        width /= 2;
+    }
+    v[0]
+}
+
 /// What the packet traversal needs from lane arithmetic.
 pub(super) trait Lanes: Copy {
     /// The rays of `mask` that enter child `k` of `n` (its grown box) within
@@ -99,20 +124,7 @@ impl Lanes for Portable {
 
     #[inline(always)]
     fn far_limit(self, t_hi: &[f32; PACKET], mask: Mask) -> f32 {
-        let mut v = [f32::NEG_INFINITY; PACKET];
-        for r in 0..PACKET {
-            if mask >> r & 1 != 0 {
-                v[r] = t_hi[r];
-            }
-        }
-        let mut width = PACKET / 2;
-        while width > 0 {
-            for r in 0..width {
-                v[r] = max(v[r], v[r + width]);
-            }
-            width /= 2;
-        }
-        v[0]
+        reduce_masked(t_hi, mask, f32::NEG_INFINITY, max)
     }
 
     #[inline(always)]
@@ -151,22 +163,8 @@ impl Lanes for Portable {
             entered |= Mask::from(near[r] <= far[r]) << r;
         }
         let entered = entered & mask;
-        // The smallest entry of the rays that enter, by halving (lanes of other rays
-        // hold +inf).
-        let mut v = [f32::INFINITY; PACKET];
-        for r in 0..PACKET {
-            if entered >> r & 1 != 0 {
-                v[r] = near[r];
-            }
-        }
-        let mut width = PACKET / 2;
-        while width > 0 {
-            for r in 0..width {
-                v[r] = min(v[r], v[r + width]);
-            }
-            width /= 2;
-        }
-        (entered, v[0])
+        // The smallest entry of the rays that enter.
+        (entered, reduce_masked(&near, entered, f32::INFINITY, min))
     }
 
     #[inline(always)]

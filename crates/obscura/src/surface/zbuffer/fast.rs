@@ -128,10 +128,10 @@ fn farthest_keys(keys: &[f32], rows: usize, farthest: &mut [f32; FAR_BLOCKS]) {
     }
 }
 
-/// A polygon ready to draw.
+/// A polygon other than a triangle ready to draw (triangles are set up in batches,
+/// [`block::triangles8`]).
 #[derive(Clone)]
 enum Setup {
-    Triangle(BlockSetup<3>),
     Quad(BlockSetup<4>),
     /// Five to [`block::MAX_EDGES`] edges.
     Polygon(BlockSetup<8>),
@@ -145,7 +145,6 @@ impl Setup {
     fn nearest_key(&self) -> f32 {
         let r = self.rect();
         match self {
-            Setup::Triangle(s) => block::nearest_key(s, r),
             Setup::Quad(s) => block::nearest_key(s, r),
             Setup::Polygon(s) => block::nearest_key(s, r),
             Setup::Spans(_, s) => block::nearest_key(s, r),
@@ -154,7 +153,6 @@ impl Setup {
 
     fn rect(&self) -> PixelRect {
         match self {
-            Setup::Triangle(s) => s.rect,
             Setup::Quad(s) => s.rect,
             Setup::Polygon(s) => s.rect,
             Setup::Spans(_, s) => s.rect,
@@ -162,8 +160,8 @@ impl Setup {
     }
 }
 
-/// The setup of polygon `p` of the view, `None` when it covers no sample (as the
-/// reference decides).
+/// The setup of polygon `p` of the view (not a triangle), `None` when it covers no
+/// sample (as the reference decides).
 #[inline(always)]
 fn setup(
     view: &PreparedView<'_>,
@@ -180,10 +178,6 @@ fn setup(
         let v = &vertices[i as usize];
         (v.x, v.y, v.zq)
     };
-    if let &[a, b, c] = &indices[s..e] {
-        return block::triangle([point(a), point(b), point(c)], fill, width, height)
-            .map(Setup::Triangle);
-    }
     if PolygonSetup::<16>::fits(e - s) {
         let mut points = [(0.0, 0.0, 0.0); 16];
         for (q, &i) in points.iter_mut().zip(&indices[s..e]) {
@@ -258,7 +252,6 @@ fn draw_setup<L: Lanes>(
     counts: &mut Counts,
 ) {
     match setup {
-        Setup::Triangle(s) => block::draw(l, s, region, align, target, face, counts),
         Setup::Quad(s) => block::draw(l, s, region, align, target, face, counts),
         Setup::Polygon(s) => block::draw(l, s, region, align, target, face, counts),
         Setup::Spans(cov, s) => draw_spans(l, cov, s, region, target, face, counts),
@@ -300,6 +293,15 @@ fn draw_band_impl<L: Lanes>(
             (r.y1.min(y1) - 1 - y0) / TILE + 1,
         );
         (tx0 as usize..tx1 as usize, ty0 as usize..ty1 as usize)
+    };
+    // Bin entry `n` (a big polygon) into the bins of the tiles `r` overlaps.
+    let put_in_bins = |bins: &mut [Vec<u32>], r: PixelRect, n: u32| {
+        let (xs, ys) = tiles_of(r);
+        for ty in ys {
+            for bin in &mut bins[ty * tiles_x..][xs.clone()] {
+                bin.push(n);
+            }
+        }
     };
     let mut scratch = PolygonSetup::<16>::new();
     let mut counts = Counts::default();
@@ -354,14 +356,8 @@ fn draw_band_impl<L: Lanes>(
                 }
                 let face = !faces[p];
                 if is_big(rect) {
-                    let n = big_triangles.len() as u32;
+                    put_in_bins(&mut bins, rect, big_triangles.len() as u32);
                     big_triangles.push((t, face, block::nearest_key(&t, rect)));
-                    let (xs, ys) = tiles_of(rect);
-                    for ty in ys {
-                        for bin in &mut bins[ty * tiles_x..][xs.clone()] {
-                            bin.push(n);
-                        }
-                    }
                 } else {
                     block::draw(l, &t, whole, Align::Polygon, &mut target, face, &mut counts);
                 }
@@ -380,15 +376,9 @@ fn draw_band_impl<L: Lanes>(
             if rect.y1 > y0 && rect.y0 < y1 {
                 let face = !faces[p];
                 if is_big(rect) {
-                    let n = OTHER | big.len() as u32;
+                    put_in_bins(&mut bins, rect, OTHER | big.len() as u32);
                     let near = s.nearest_key();
                     big.push((s, face, near));
-                    let (xs, ys) = tiles_of(rect);
-                    for ty in ys {
-                        for bin in &mut bins[ty * tiles_x..][xs.clone()] {
-                            bin.push(n);
-                        }
-                    }
                 } else {
                     draw_setup(l, &s, whole, Align::Polygon, &mut target, face, &mut counts);
                 }
