@@ -210,9 +210,20 @@ impl ViewArgs {
         PrepareOptions::default().with_backface(mode)
     }
 
-    /// Runs `f` on a thread pool of the requested size.
+    /// Runs `f` with rayon's current pool of the requested size.
+    ///
+    /// The first call makes rayon's global pool that size and runs `f` on the calling
+    /// thread, which loaded the scene: its caches hold the scene, and a single-thread
+    /// run (`--threads 1`) never leaves it. A later call asking for another size gets a
+    /// pool of its own.
     pub fn with_threads<T: Send>(&self, f: impl FnOnce() -> T + Send) -> Result<T> {
         let n = self.threads.unwrap_or(0);
+        let global = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global();
+        if global.is_ok() || (n != 0 && rayon::current_num_threads() == n) {
+            return Ok(f());
+        }
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()
