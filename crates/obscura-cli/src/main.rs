@@ -13,7 +13,7 @@ use clap::{Parser, Subcommand};
 /// Large buffers (the loaded scene, the prepared view, the frame) in whole huge pages:
 /// a one-shot run otherwise spends milliseconds on page faults at their ends.
 #[global_allocator]
-static ALLOCATOR: obscura::memory::HugePageAllocator = obscura::memory::HugePageAllocator;
+static ALLOCATOR: obscura::memory::HugePageAllocator = obscura::memory::HugePageAllocator::new();
 
 /// What can be seen? Clipping, culling and hidden-surface removal, every classical
 /// algorithm behind one interface.
