@@ -18,12 +18,13 @@
 //! - Source: Linux `madvise(2)` and Documentation/admin-guide/mm/transhuge.rst.
 //!
 //! A program can go further and install [`HugePageAllocator`] as its global allocator:
-//! every large block then lies in whole huge pages, its ends included.
+//! every large block then lies in whole huge pages, its ends included, and freed large
+//! blocks are kept and reused, so later buffers cost no page fault at all.
 
 use std::collections::TryReserveError;
 
 mod allocator;
-pub use allocator::{HugePageAllocator, LARGE};
+pub use allocator::{HugePageAllocator, KEPT_BLOCKS, KEPT_BYTES, LARGE};
 
 /// The size of a transparent huge page on x86-64 and most 64-bit Linux systems.
 pub(crate) const HUGE_PAGE: usize = 2 << 20;
