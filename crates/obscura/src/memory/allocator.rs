@@ -92,9 +92,6 @@ impl Kept {
 
     /// Adds a block if there is room; false if not.
     fn put(&mut self, at: usize, len: usize) -> bool {
-        if len == 0 {
-            return true;
-        }
         if self.count == KEPT_BLOCKS || self.bytes() + len > KEPT_BYTES {
             return false;
         }
@@ -103,18 +100,26 @@ impl Kept {
         true
     }
 
-    /// Removes and returns the smallest block of at least `len` bytes, else the
-    /// largest one; `None` when none is kept.
+    /// Removes and returns a block for `len` bytes (a multiple of [`HUGE_PAGE`]): the
+    /// first `len` bytes of the smallest block that holds them (the rest of it stays
+    /// kept, always with room: it replaces a larger block), else the largest block
+    /// whole; `None` when none is kept.
     fn take(&mut self, len: usize) -> Option<(usize, usize)> {
         let kept = &self.blocks[..self.count];
         let fits = (0..kept.len())
             .filter(|&i| kept[i].1 >= len)
             .min_by_key(|&i| kept[i].1);
         let i = fits.or_else(|| (0..kept.len()).max_by_key(|&i| kept[i].1))?;
-        let b = self.blocks[i];
+        let (at, kept_len) = self.blocks[i];
         self.count -= 1;
         self.blocks[i] = self.blocks[self.count];
-        Some(b)
+        if kept_len > len {
+            // Last, as a freed block: the order decides between equal fits later.
+            self.blocks[self.count] = (at + len, kept_len - len);
+            self.count += 1;
+            return Some((at, len));
+        }
+        Some((at, kept_len))
     }
 }
 
@@ -151,12 +156,7 @@ impl HugePageAllocator {
         let Some((at, kept_len)) = taken else {
             return map(size);
         };
-        let (p, reused) = if kept_len >= len {
-            // The rest of the block, whole huge pages, stays kept (or is unmapped).
-            if !self.lock().put(at + len, kept_len - len) {
-                // SAFETY: the tail is ours, mapped, and used by nobody.
-                unsafe { unmap((at + len) as *mut u8, kept_len - len) };
-            }
+        let (p, reused) = if kept_len == len {
             (at as *mut u8, size)
         } else {
             // SAFETY: a kept block is a whole mapping of `kept_len` bytes, used by
@@ -624,9 +624,10 @@ mod tests {
         if !cfg!(target_os = "linux") {
             return;
         }
-        let a = HugePageAllocator::new();
         // SAFETY: blocks freed once with their layouts, never touched.
         unsafe {
+            // The count: the blocks past KEPT_BLOCKS go back to the kernel.
+            let a = HugePageAllocator::new();
             let blocks: Vec<*mut u8> = (0..KEPT_BLOCKS + 2)
                 .map(|_| a.alloc(layout_of(1)))
                 .collect();
@@ -635,13 +636,18 @@ mod tests {
                 a.dealloc(p, layout_of(1));
             }
             assert_eq!(a.kept_bytes(), KEPT_BLOCKS * HUGE_PAGE);
-            // A block larger than the byte limit goes back to the kernel (mapping it
-            // costs address space only: it is never written).
+            // The bytes: with room for more blocks, one larger than KEPT_BYTES is not
+            // kept (mapping it costs address space only: it is never written).
+            let b = HugePageAllocator::new();
             let pages = KEPT_BYTES / HUGE_PAGE + 1;
-            let big = a.alloc(layout_of(pages));
+            let big = b.alloc(layout_of(pages));
             assert!(!big.is_null());
-            a.dealloc(big, layout_of(pages));
-            assert!(a.kept_bytes() <= KEPT_BYTES);
+            b.dealloc(big, layout_of(pages));
+            assert_eq!(b.kept_bytes(), 0);
+            // One that fits is kept.
+            let p = b.alloc(layout_of(1));
+            b.dealloc(p, layout_of(1));
+            assert_eq!(b.kept_bytes(), HUGE_PAGE);
         }
     }
 }
