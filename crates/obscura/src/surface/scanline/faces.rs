@@ -477,3 +477,76 @@ impl Faces {
         self.free.append(&mut self.pending);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raster::TriangleSetup;
+    use crate::scene::demo::SplitMix64;
+
+    /// The bits of a setup: equal bits mean the same setup, `-0.0` and NaN included.
+    fn bits(edges: &[EdgeFunction], rect: PixelRect, plane: &DepthPlane) -> Vec<u64> {
+        let mut v: Vec<u64> = edges
+            .iter()
+            .flat_map(|e| {
+                [e.ox, e.oy, e.dx, e.dy, e.sign]
+                    .map(f64::to_bits)
+                    .into_iter()
+                    .chain([u64::from(e.include_zero)])
+            })
+            .collect();
+        v.extend([rect.x0, rect.y0, rect.x1, rect.y1].map(u64::from));
+        v.extend([plane.x0, plane.y0, plane.z0, plane.dzdx, plane.dzdy].map(f64::to_bits));
+        v
+    }
+
+    #[test]
+    fn setup_triangle_is_the_shared_triangle_setup_bit_for_bit() {
+        // The scanline sets triangles up with its own rounding (no C library calls);
+        // the result must be the shared setup's exactly, or the two would disagree on
+        // which samples an edge holds.
+        let mut rng = SplitMix64(33);
+        let (w, h) = (64u32, 48u32);
+        let mut set_up = 0;
+        for round in 0..20_000 {
+            let scale = [0.4, 3.0, 20.0, 80.0, 1e7][round % 5];
+            let mut coordinate = |offset: f64| (rng.next_f64() - 0.2) * scale + offset;
+            let mut p = [(0.0, 0.0, 0.0); 3];
+            for q in &mut p {
+                *q = (coordinate(8.0), coordinate(6.0), coordinate(0.0));
+            }
+            match round % 11 {
+                // A repeated vertex, collinear vertices, a horizontal edge.
+                0 => p[2] = p[0],
+                1 => p[2] = (2.0 * p[1].0 - p[0].0, 2.0 * p[1].1 - p[0].1, p[2].2),
+                2 => p[1].1 = p[0].1,
+                // Bad coordinates.
+                3 => p[1].0 = f64::NAN,
+                4 => p[2].1 = f64::INFINITY,
+                5 => p[0].2 = f64::NAN,
+                // Vertices on the half-pixel grid: samples on edges and vertices.
+                6 | 7 => {
+                    for q in &mut p {
+                        *q = ((q.0 * 2.0).round() / 2.0, (q.1 * 2.0).round() / 2.0, q.2);
+                    }
+                }
+                _ => {}
+            }
+            for fill in [FillRule::TopLeft, FillRule::Inclusive] {
+                let ours = setup_triangle(p, fill, w, h);
+                let shared = TriangleSetup::new(p, fill, w, h);
+                assert_eq!(ours.is_some(), shared.is_some(), "{p:?}");
+                if let (Some((edges, rect, plane)), Some(s)) = (ours, shared) {
+                    assert_eq!(
+                        bits(&edges, rect, &plane),
+                        bits(&s.edges, s.rect, &s.plane),
+                        "{p:?} {fill:?}"
+                    );
+                    set_up += 1;
+                }
+            }
+        }
+        // Most random triangles cover a sample of the image.
+        assert!(set_up > 10_000, "{set_up}");
+    }
+}
