@@ -17,3 +17,4 @@ mod setup;
 pub use coverage::{EdgeFunction, FillRule, PixelRect, PolygonCoverage, sample_rect};
 pub use depth_plane::DepthPlane;
 pub use setup::{PolygonSetup, TriangleSetup, row_span};
+pub(crate) use setup::{round_down, round_up, sample_range};

@@ -19,6 +19,7 @@
 use crate::raster::EdgeFunction;
 #[cfg(doc)]
 use crate::raster::sample_rect;
+use crate::raster::{round_down, round_up, sample_range};
 use crate::view::{PreparedView, ViewPolygon};
 
 /// One entry of the active edge list: the seed's `(x_min, 1/m, y_max)`, the bound
@@ -167,42 +168,6 @@ fn ceil_within(v: f64, lo: i64, hi: i64) -> i64 {
     if (t as f64) < v { t + 1 } else { t }
 }
 
-/// Above this every `f64` is an integer.
-const ALL_INTEGERS: f64 = 4_503_599_627_370_496.0;
-/// Below this (in magnitude) adding and subtracting [`ROUND_TO_INTEGER`] rounds to the
-/// nearest integer.
-const ROUNDS_EXACTLY: f64 = 2_251_799_813_685_248.0;
-/// `1.5 * 2^52`: a sum with it has no fraction bits left.
-const ROUND_TO_INTEGER: f64 = 6_755_399_441_055_744.0;
-
-/// `v` rounded to an integer, the nearest one for `|v| < 2^51` (no C library call
-/// on targets without a rounding instruction); else by truncation, or `v` itself
-/// from `2^52` on (every such `f64` is an integer) and for NaN.
-#[inline(always)]
-fn round_near(v: f64) -> f64 {
-    if v.abs() < ROUNDS_EXACTLY {
-        (v + ROUND_TO_INTEGER) - ROUND_TO_INTEGER
-    } else if v.abs() < ALL_INTEGERS {
-        v as i64 as f64
-    } else {
-        v
-    }
-}
-
-/// `v.ceil()` without a C library call; NaN stays NaN.
-#[inline(always)]
-pub(crate) fn round_up(v: f64) -> f64 {
-    let t = round_near(v);
-    if t < v { t + 1.0 } else { t }
-}
-
-/// `v.floor()` without a C library call; NaN stays NaN.
-#[inline(always)]
-pub(crate) fn round_down(v: f64) -> f64 {
-    let t = round_near(v);
-    if t > v { t - 1.0 } else { t }
-}
-
 /// The first `i` in `lo..hi` where the monotone predicate (false then true) holds,
 /// or `hi`, searched from `guess`.
 #[inline]
@@ -246,17 +211,6 @@ pub(crate) fn edge_rows(ya: f64, yb: f64, y0: u32, y1: u32) -> Option<(u32, u32)
     let first = round_up(ya - 0.5).max(f64::from(y0));
     let last = round_down(yb - 0.5).min(f64::from(y1) - 1.0);
     (first <= last).then_some((first as u32, last as u32))
-}
-
-/// [`sample_rect`]'s pixel range of `[lo, hi]` on an axis of `n` pixels, with its
-/// rounding done by truncation (no C library call where the target has no rounding
-/// instruction): `ceil(lo - 0.5)` to `floor(hi - 0.5) + 1`, clamped to `0..=n`.
-#[inline(always)]
-pub(crate) fn sample_range(lo: f64, hi: f64, n: u32) -> (u32, u32) {
-    let n = f64::from(n);
-    let a = round_up(lo - 0.5).max(0.0).min(n);
-    let b = (round_down(hi - 0.5) + 1.0).max(0.0).min(n);
-    (a as u32, b as u32)
 }
 
 /// The rows of a polygon's sample box (as [`sample_rect`] has them; `None` when the
@@ -380,42 +334,6 @@ mod tests {
             };
             assert_eq!(ceil_within(v, 2, 12), expected, "{v}");
         }
-    }
-
-    #[test]
-    fn rounding_by_truncation_matches_the_library() {
-        for v in [
-            0.0,
-            -0.0,
-            0.5,
-            -0.5,
-            1.0,
-            -1.0,
-            2.5,
-            -2.5,
-            1e-300,
-            -1e-300,
-            7.999_999_999,
-            -7.999_999_999,
-            1e15 + 0.5,
-            -1e15 - 0.5,
-            2_251_799_813_685_247.5,
-            -2_251_799_813_685_247.5,
-            3e15 + 0.5,
-            -3e15 - 0.5,
-            4_503_599_627_370_495.5,
-            1e20,
-            -1e20,
-            0.49999999999999994,
-            -0.49999999999999994,
-            1.5,
-            -1.5,
-            1e300,
-        ] {
-            assert_eq!(round_up(v), v.ceil(), "{v}");
-            assert_eq!(round_down(v), v.floor(), "{v}");
-        }
-        assert!(round_up(f64::NAN).is_nan() && round_down(f64::INFINITY).is_infinite());
     }
 
     #[test]

@@ -20,10 +20,11 @@
 //! [`crate::raster::PolygonCoverage`]'s edges and box); bigger polygons go through
 //! `PolygonCoverage` itself.
 
-use super::edge_table::{ScanEdge, round_down, round_up, sample_range, tolerance};
-#[cfg(doc)]
-use crate::raster::TriangleSetup;
-use crate::raster::{DepthPlane, EdgeFunction, FillRule, PixelRect, PolygonCoverage, PolygonSetup};
+use super::edge_table::{ScanEdge, tolerance};
+use crate::raster::{
+    DepthPlane, EdgeFunction, FillRule, PixelRect, PolygonCoverage, PolygonSetup, TriangleSetup,
+    round_down, round_up,
+};
 use crate::view::PreparedView;
 
 /// `slot_of` for a polygon that is not live.
@@ -221,43 +222,6 @@ fn finite(p: &DepthPlane) -> bool {
         .all(|v| v.is_finite())
 }
 
-/// A triangle `(x, y, zq)` set up for a `width x height` image: exactly what
-/// [`TriangleSetup::new`] gives (the same [`EdgeFunction::new`] edges, the box of
-/// [`crate::raster::sample_rect`], the plane of [`DepthPlane::from_points`]; a test
-/// compares them bit for bit), with the box's rounding done without C library calls.
-pub(crate) fn setup_triangle(
-    p: [(f64, f64, f64); 3],
-    fill: FillRule,
-    width: u32,
-    height: u32,
-) -> Option<([EdgeFunction; 3], PixelRect, DepthPlane)> {
-    let [a, b, c] = p;
-    let (minx, maxx) = (a.0.min(b.0).min(c.0), a.0.max(b.0).max(c.0));
-    let (miny, maxy) = (a.1.min(b.1).min(c.1), a.1.max(b.1).max(c.1));
-    if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
-        return None;
-    }
-    let (x0, x1) = sample_range(minx, maxx, width);
-    let (y0, y1) = sample_range(miny, maxy, height);
-    let rect = PixelRect { x0, y0, x1, y1 };
-    if rect.is_empty() {
-        return None;
-    }
-    let (ax, ay) = (b.0 - a.0, b.1 - a.1);
-    let (bx, by) = (c.0 - a.0, c.1 - a.1);
-    let area2 = ax * by - ay * bx;
-    if !(area2 != 0.0 && area2.is_finite()) {
-        return None;
-    }
-    let sign = area2.signum();
-    let edge = |p: (f64, f64, f64), q: (f64, f64, f64)| {
-        EdgeFunction::new((p.0, p.1), (q.0, q.1), sign, fill)
-    };
-    let edges = [edge(a, b)?, edge(b, c)?, edge(c, a)?];
-    let plane = DepthPlane::from_points(&p)?;
-    Some((edges, rect, plane))
-}
-
 /// The rows on which a triangle's span must be checked against its edge that is not
 /// active there, as `from..to`; on every other row the check is proven to pass.
 ///
@@ -366,7 +330,7 @@ impl Faces {
         let mut check = (0, u32::MAX);
         let set = if n == 3 {
             let p = [vertex(0), vertex(1), vertex(2)];
-            setup_triangle(p, fill, w, h).map(|(edges, rect, plane)| {
+            TriangleSetup::new(p, fill, w, h).map(|TriangleSetup { edges, rect, plane }| {
                 self.edges.store(si, &edges);
                 let area2 =
                     (p[1].0 - p[0].0) * (p[2].1 - p[0].1) - (p[1].1 - p[0].1) * (p[2].0 - p[0].0);
@@ -475,78 +439,5 @@ impl Faces {
     /// End of a row: slots freed on it become reusable (see the module doc).
     pub fn end_row(&mut self) {
         self.free.append(&mut self.pending);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::raster::TriangleSetup;
-    use crate::scene::demo::SplitMix64;
-
-    /// The bits of a setup: equal bits mean the same setup, `-0.0` and NaN included.
-    fn bits(edges: &[EdgeFunction], rect: PixelRect, plane: &DepthPlane) -> Vec<u64> {
-        let mut v: Vec<u64> = edges
-            .iter()
-            .flat_map(|e| {
-                [e.ox, e.oy, e.dx, e.dy, e.sign]
-                    .map(f64::to_bits)
-                    .into_iter()
-                    .chain([u64::from(e.include_zero)])
-            })
-            .collect();
-        v.extend([rect.x0, rect.y0, rect.x1, rect.y1].map(u64::from));
-        v.extend([plane.x0, plane.y0, plane.z0, plane.dzdx, plane.dzdy].map(f64::to_bits));
-        v
-    }
-
-    #[test]
-    fn setup_triangle_is_the_shared_triangle_setup_bit_for_bit() {
-        // The scanline sets triangles up with its own rounding (no C library calls);
-        // the result must be the shared setup's exactly, or the two would disagree on
-        // which samples an edge holds.
-        let mut rng = SplitMix64(33);
-        let (w, h) = (64u32, 48u32);
-        let mut set_up = 0;
-        for round in 0..20_000 {
-            let scale = [0.4, 3.0, 20.0, 80.0, 1e7][round % 5];
-            let mut coordinate = |offset: f64| (rng.next_f64() - 0.2) * scale + offset;
-            let mut p = [(0.0, 0.0, 0.0); 3];
-            for q in &mut p {
-                *q = (coordinate(8.0), coordinate(6.0), coordinate(0.0));
-            }
-            match round % 11 {
-                // A repeated vertex, collinear vertices, a horizontal edge.
-                0 => p[2] = p[0],
-                1 => p[2] = (2.0 * p[1].0 - p[0].0, 2.0 * p[1].1 - p[0].1, p[2].2),
-                2 => p[1].1 = p[0].1,
-                // Bad coordinates.
-                3 => p[1].0 = f64::NAN,
-                4 => p[2].1 = f64::INFINITY,
-                5 => p[0].2 = f64::NAN,
-                // Vertices on the half-pixel grid: samples on edges and vertices.
-                6 | 7 => {
-                    for q in &mut p {
-                        *q = ((q.0 * 2.0).round() / 2.0, (q.1 * 2.0).round() / 2.0, q.2);
-                    }
-                }
-                _ => {}
-            }
-            for fill in [FillRule::TopLeft, FillRule::Inclusive] {
-                let ours = setup_triangle(p, fill, w, h);
-                let shared = TriangleSetup::new(p, fill, w, h);
-                assert_eq!(ours.is_some(), shared.is_some(), "{p:?}");
-                if let (Some((edges, rect, plane)), Some(s)) = (ours, shared) {
-                    assert_eq!(
-                        bits(&edges, rect, &plane),
-                        bits(&s.edges, s.rect, &s.plane),
-                        "{p:?} {fill:?}"
-                    );
-                    set_up += 1;
-                }
-            }
-        }
-        // Most random triangles cover a sample of the image.
-        assert!(set_up > 10_000, "{set_up}");
     }
 }

@@ -3,8 +3,9 @@
 //! processor's vector extensions.
 //!
 //! Per band, one pass over its polygons: each is set up once (consecutive triangles
-//! eight at a time, [`block::triangles8`]); a small one is drawn at once, a big one (wider or taller than [`BIG`] pixels) is put in the bins of the
-//! 64x64 tiles it overlaps. Then each tile draws its big polygons while its keys and ids
+//! eight at a time, [`block::triangles8`]); a small one is drawn at once, a big one
+//! (wider or taller than [`BIG`] pixels) is put in the bins of the 64x64 tiles it
+//! overlaps. Then each tile draws its big polygons while its keys and ids
 //! (32 KiB) stay in the first-level cache, nearest first, skipping the blocks that hide
 //! them (see [`crate::raster::block::BlockTarget::with_farthest`]), and turns its keys
 //! and encoded ids into depths and face ids. The depth test takes the nearer key and, on a tie, the lower
