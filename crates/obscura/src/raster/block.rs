@@ -36,7 +36,9 @@
 //! - Occlusion culling (optional, [`BlockTarget::with_farthest`]): per block of the
 //!   grid the farthest key it holds; a block whose farthest key is larger than the
 //!   polygon's largest key over the block ([`nearest_key`], a rigorous bound) is
-//!   skipped, which changes nothing in the result.
+//!   skipped, which changes nothing in the result. The polygon's whole part in the
+//!   region is tested first, against the smallest farthest key of the blocks it
+//!   overlaps: a polygon hidden in all of them is skipped with one test.
 //! - Limitations: at most [`MAX_EDGES`] edges ([`BlockSetup::new`] refuses others).
 //!   The caller picks the edge count `E` of a setup: 3 for triangles, 4 for quads, 8
 //!   for the rest (unused edges hold every sample inside).
@@ -416,6 +418,44 @@ impl<'a> BlockTarget<'a> {
         far > nearest_key(s, c)
     }
 
+    /// Whether the polygon `s` wins no pixel of `c` (pixels of the target), by the
+    /// keys of all the grid blocks `c` overlaps: their smallest farthest key is
+    /// larger than any key the polygon has in `c`. One test for a polygon's whole
+    /// part in a tile, before its blocks are walked.
+    #[inline(always)]
+    fn hides_all<const E: usize>(&self, s: &BlockSetup<E>, c: PixelRect) -> bool {
+        if self.farthest.is_empty() || c.is_empty() || c.x0 < self.x0 || c.y0 < self.y0 {
+            return false;
+        }
+        let bw = 2 * BLOCK;
+        let per_row = self.stride / bw as usize;
+        let (bx0, bx1) = (
+            ((c.x0 - self.x0) / bw) as usize,
+            ((c.x1 - 1 - self.x0) / bw) as usize + 1,
+        );
+        let (by0, by1) = (
+            ((c.y0 - self.y0) / BLOCK) as usize,
+            ((c.y1 - 1 - self.y0) / BLOCK) as usize + 1,
+        );
+        if bx1 > per_row {
+            return false;
+        }
+        let mut far = f32::INFINITY;
+        for by in by0..by1 {
+            let Some(row) = self.farthest.get(by * per_row + bx0..by * per_row + bx1) else {
+                return false;
+            };
+            for &f in row {
+                // An empty pixel (key 0) or a NaN hides nothing.
+                if !(f > 0.0) {
+                    return false;
+                }
+                far = far.min(f);
+            }
+        }
+        far > nearest_key(s, c)
+    }
+
     /// Recomputes the farthest key of the grid block at `(bx, by)` if the target holds
     /// all of its pixels.
     #[inline(always)]
@@ -657,6 +697,9 @@ fn draw_blocks<L: Lanes, const E: usize, const WIDE: bool>(
             face,
             counts,
         );
+        return;
+    }
+    if WIDE && target.hides_all(s, r) {
         return;
     }
     let edges = EdgeLanes::new(l, s);
