@@ -14,9 +14,15 @@
 //!   bit for bit (negation is exact and rounding to nearest is symmetric), and the
 //!   sample is inside when `t < bound`, `bound` being `0` for an edge that excludes its
 //!   samples and the smallest positive double for one that includes them.
-//! - Blocks: a polygon whose rectangle is larger than one block is walked block by
-//!   block; each block is first classified by its corner samples. Every step of the
-//!   edge expression is monotonic in `px` along a row and in `py` along a column, so
+//! - Narrow polygons: with [`Align::Polygon`], a polygon at most 16 pixels wide
+//!   (most triangles of a detailed model) is walked row by row from its first column,
+//!   every row tested against the edges, without a branch on whether the row has a
+//!   covered sample: such rows are frequent in thin triangles and unpredictable, and
+//!   the masked depth test of no pixel touches no memory. Measured on the small
+//!   triangles of the Sponza atrium (169k of them, at most 64 pixels on a side): 17.1
+//!   ms drawn block by block, 15.1 ms row by row.
+//! - Blocks: a wider polygon is walked block by block; each block is first
+//!   classified by its corner samples. Every step of the edge expression is monotonic in `px` along a row and in `py` along a column, so
 //!   the sample of a block that is most inside an edge (resp. most outside) is a
 //!   corner chosen by the signs of `sdy` and `sdx`: if that corner is outside some
 //!   edge no sample of the block is covered (the block is skipped), and if the other
@@ -535,8 +541,8 @@ pub fn nearest_key<const E: usize>(s: &BlockSetup<E>, c: PixelRect) -> f32 {
 /// Where blocks start.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Align {
-    /// At the polygon's rectangle (fewest blocks: a polygon at most 8 pixels wide is
-    /// one column of 8-pixel blocks, one at most 16 wide one column of 16-pixel ones).
+    /// At the polygon's rectangle (fewest blocks); a polygon at most 16 pixels wide
+    /// is walked row by row instead (see the module doc).
     Polygon,
     /// On the image's grid of 16x8 blocks (no block crosses a tile's border, and a
     /// row of a block is one cache line of keys when the rows are aligned).
@@ -659,13 +665,88 @@ pub fn draw<L: Lanes, const E: usize>(
         return;
     }
     if align == Align::Polygon && r.x1 - r.x0 <= BLOCK {
-        draw_blocks::<L, E, false>(l, s, r, r.x0, r.y0, target, face, counts);
+        draw_column::<L, E, false>(l, s, r, target, face, counts);
+    } else if align == Align::Polygon && r.x1 - r.x0 <= 2 * BLOCK {
+        draw_column::<L, E, true>(l, s, r, target, face, counts);
     } else {
         let (bx0, by0) = match align {
             Align::Polygon => (r.x0, r.y0),
             Align::Grid => (r.x0 & !(2 * BLOCK - 1), r.y0 & !(BLOCK - 1)),
         };
         draw_blocks::<L, E, true>(l, s, r, bx0, by0, target, face, counts);
+    }
+}
+
+/// [`draw`] for a polygon at most 16 (`WIDE`) or 8 columns wide, in `r` (its pixels in
+/// the region and the target): row after row from its first column, every row's
+/// samples tested against the edges, without classifying blocks (a narrow polygon's
+/// blocks are almost all partly covered). The expressions are [`draw_block`]'s, so the
+/// coverage and the keys are too.
+#[inline(always)]
+fn draw_column<L: Lanes, const E: usize, const WIDE: bool>(
+    l: L,
+    s: &BlockSetup<E>,
+    r: PixelRect,
+    target: &mut BlockTarget<'_>,
+    face: u32,
+    counts: &mut Counts,
+) {
+    let lanes = lane_range(0, r.x1 - r.x0);
+    let stride = target.stride;
+    let mut at = target.at(r.x0, r.y0);
+    let reach = 16 - lanes.leading_zeros() as usize;
+    let rows = (r.y1 - r.y0) as usize;
+    // The depth tests below access the pixels of `lanes` in every row without checking
+    // them: check the last row once.
+    if lanes == 0
+        || rows == 0
+        || at + (rows - 1) * stride + reach > target.keys.len().min(target.ids.len())
+    {
+        return;
+    }
+    let lane = l.load(&LANE);
+    let dx = f64::from(r.x0) - f64::from(s.rect.x0);
+    let dzdx = l.splat(s.dzdx);
+    let zc = [
+        l.mul(dzdx, l.add_scalar(lane, dx)),
+        l.mul(dzdx, l.add_scalar(lane, dx + 8.0)),
+    ];
+    let px = l.add_scalar(lane, f64::from(r.x0) + 0.5);
+    let px_hi = l.add_scalar(lane, f64::from(r.x0) + 8.5);
+    let mut col_lo = [px; E];
+    let mut col_hi = [px; E];
+    let mut bound = [px; E];
+    for k in 0..E {
+        let sdy = l.splat(s.sdy[k]);
+        col_lo[k] = l.mul(sdy, l.sub_scalar(px, s.ox[k]));
+        if WIDE {
+            col_hi[k] = l.mul(sdy, l.sub_scalar(px_hi, s.ox[k]));
+        }
+        bound[k] = l.splat(s.bound[k]);
+    }
+    let (lanes_lo, lanes_hi) = (lanes as u8, (lanes >> 8) as u8);
+    let (keys, ids) = (&mut *target.keys, &mut *target.ids);
+    for j in r.y0..r.y1 {
+        let py = f64::from(j) + 0.5;
+        let mut lo = lanes_lo;
+        let mut hi = lanes_hi;
+        for k in 0..E {
+            let row = s.sdx[k] * (py - s.oy[k]);
+            lo &= l.less(0xff, l.sub_scalar(col_lo[k], row), bound[k]);
+            if WIDE {
+                hi &= l.less(0xff, l.sub_scalar(col_hi[k], row), bound[k]);
+            }
+        }
+        let cover = u16::from(lo) | if WIDE { u16::from(hi) << 8 } else { 0 };
+        // No branch on an empty row (thin polygons have many, unpredictably): the
+        // masked test of no pixel accesses nothing.
+        counts.tested += u64::from(cover.count_ones());
+        let zj = s.dzdy * (f64::from(j) - f64::from(s.rect.y0)) + s.z0;
+        // SAFETY: `cover` is within `lanes`, whose pixels in this row are inside the
+        // slices (checked above for the last row).
+        let taken = unsafe { test_row::<L, WIDE>(l, keys, ids, at, cover, zc, zj, face) };
+        counts.written += u64::from(taken.count_ones());
+        at += stride;
     }
 }
 
@@ -840,15 +921,14 @@ fn draw_block<L: Lanes, const E: usize, const WIDE: bool>(
             }
         }
         let cover = u16::from(lo) | if WIDE { u16::from(hi) << 8 } else { 0 };
-        if cover != 0 {
-            counts.tested += u64::from(cover.count_ones());
-            let zj = zr[j];
-            // SAFETY: `cover` is within `lanes`, whose pixels in this row are inside the
-            // slices (checked above for the farthest row).
-            let taken =
-                unsafe { test_row::<L, WIDE>(l, keys, ids, at, cover, [zc_lo, zc_hi], zj, face) };
-            counts.written += u64::from(taken.count_ones());
-        }
+        // No branch on an empty row: the masked test of no pixel accesses nothing.
+        counts.tested += u64::from(cover.count_ones());
+        let zj = zr[j];
+        // SAFETY: `cover` is within `lanes`, whose pixels in this row are inside the
+        // slices (checked above for the farthest row).
+        let taken =
+            unsafe { test_row::<L, WIDE>(l, keys, ids, at, cover, [zc_lo, zc_hi], zj, face) };
+        counts.written += u64::from(taken.count_ones());
         at += stride;
     }
 }
@@ -1007,6 +1087,94 @@ mod tests {
         }
         // Most random triangles are valid; the special kinds make the rest.
         assert!(valid > 20_000, "{valid}");
+    }
+
+    /// One triangle drawn alone into an empty `w x h` buffer with `align`: its keys,
+    /// ids and counts.
+    fn draw_alone<L: Lanes>(
+        l: L,
+        s: &BlockSetup<3>,
+        align: Align,
+        w: u32,
+        h: u32,
+    ) -> (Vec<f32>, Vec<u32>, Counts) {
+        let (mut keys, mut ids) = (vec![0.0; (w * h) as usize], vec![0; (w * h) as usize]);
+        let mut counts = Counts::default();
+        let mut target = BlockTarget::new(&mut keys, &mut ids, w as usize, 0, 0).unwrap();
+        let whole = target.rect();
+        draw(l, s, whole, align, &mut target, 7, &mut counts);
+        (keys, ids, counts)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+    fn draw_alone_avx512(
+        l: super::super::avx512::Avx512,
+        s: &BlockSetup<3>,
+        align: Align,
+        w: u32,
+        h: u32,
+    ) -> (Vec<f32>, Vec<u32>, Counts) {
+        draw_alone(l, s, align, w, h)
+    }
+
+    #[test]
+    fn narrow_polygons_drawn_row_by_row_cover_the_samples_of_the_rule() {
+        // Polygons at most 16 pixels wide drawn with `Align::Polygon` take the
+        // row-by-row walk (`draw_column`); with `Align::Grid` the block walk, which
+        // classifies blocks. Both must give exactly the pixels whose sample the
+        // per-pixel rule covers, with the same keys.
+        let mut rng = SplitMix64(23);
+        let (w, h) = (120, 80);
+        let (mut narrow, mut wide) = (0, 0);
+        for _ in 0..6000 {
+            let t = random_triangle(&mut rng);
+            for fill in [FillRule::TopLeft, FillRule::Inclusive] {
+                let Some(s) = triangle(t, fill, w, h) else {
+                    continue;
+                };
+                let width = s.rect.x1 - s.rect.x0;
+                // (A non-finite depth wins no pixel: not what this test is about.)
+                if width > 2 * BLOCK || !(s.z0 + s.dzdx + s.dzdy).is_finite() {
+                    continue;
+                }
+                if width <= BLOCK {
+                    narrow += 1;
+                } else {
+                    wide += 1;
+                }
+                let mut runs = vec![
+                    draw_alone(super::super::lanes::Portable, &s, Align::Polygon, w, h),
+                    draw_alone(super::super::lanes::Portable, &s, Align::Grid, w, h),
+                ];
+                #[cfg(target_arch = "x86_64")]
+                if let Some(l) = super::super::avx512::Avx512::new() {
+                    for align in [Align::Polygon, Align::Grid] {
+                        // SAFETY: `Avx512::new` checked the features.
+                        runs.push(unsafe { draw_alone_avx512(l, &s, align, w, h) });
+                    }
+                }
+                let (keys, ids, counts) = &runs[0];
+                let mut covered = 0;
+                for j in 0..h {
+                    for i in 0..w {
+                        let at = (j * w + i) as usize;
+                        let inside = s.covers_sample(f64::from(i) + 0.5, f64::from(j) + 0.5);
+                        covered += u64::from(inside);
+                        assert_eq!(ids[at] == 7, inside, "{t:?} {fill:?} pixel ({i}, {j})");
+                        assert_eq!(keys[at] > 0.0, inside, "{t:?} {fill:?} pixel ({i}, {j})");
+                    }
+                }
+                assert_eq!(counts.tested, covered, "{t:?}");
+                for (k, run) in runs.iter().enumerate().skip(1) {
+                    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&run.0), bits(keys), "run {k}: {t:?} {fill:?}");
+                    assert_eq!(&run.1, ids, "run {k}: {t:?} {fill:?}");
+                    assert_eq!(run.2, *counts, "run {k}: {t:?} {fill:?}");
+                }
+            }
+        }
+        assert!(narrow > 1000 && wide > 300, "{narrow} narrow, {wide} wide");
     }
 
     #[test]
