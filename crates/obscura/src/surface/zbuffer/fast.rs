@@ -4,8 +4,9 @@
 //!
 //! Per band, one pass over its polygons: each is set up once (consecutive triangles
 //! eight at a time, [`block::triangles8`]); a small one is drawn at once, a big one
-//! (wider or taller than [`BIG`] pixels) is put in the bins of the 64x64 tiles it
-//! overlaps. Then each tile draws its big polygons while its keys and ids
+//! (wider or taller than [`BIG`] pixels) is kept. The big ones are sorted once,
+//! nearest first, and put in that order in the bins of the 64x64 tiles they overlap.
+//! Then each tile draws its big polygons while its keys and ids
 //! (32 KiB) stay in the first-level cache, nearest first, skipping the blocks that hide
 //! them (see [`crate::raster::block::BlockTarget::with_farthest`]), and turns its keys
 //! and encoded ids into depths and face ids. The depth test takes the nearer key and, on a tie, the lower
@@ -357,7 +358,6 @@ fn draw_band_impl<L: Lanes>(
                 }
                 let face = !faces[p];
                 if is_big(rect) {
-                    put_in_bins(&mut bins, rect, big_triangles.len() as u32);
                     big_triangles.push((t, face, block::nearest_key(&t, rect)));
                 } else {
                     block::draw(l, &t, whole, Align::Polygon, &mut target, face, &mut counts);
@@ -377,7 +377,6 @@ fn draw_band_impl<L: Lanes>(
             if rect.y1 > y0 && rect.y0 < y1 {
                 let face = !faces[p];
                 if is_big(rect) {
-                    put_in_bins(&mut bins, rect, OTHER | big.len() as u32);
                     let near = s.nearest_key();
                     big.push((s, face, near));
                 } else {
@@ -388,6 +387,24 @@ fn draw_band_impl<L: Lanes>(
         if next.is_none() {
             break;
         }
+    }
+    // The big polygons into the bins of their tiles nearest first (one sort for all
+    // bins), so that each tile draws them nearest first: the blocks they fill hide
+    // the polygons behind them.
+    let mut order: Vec<(f32, u32)> = big_triangles
+        .iter()
+        .enumerate()
+        .map(|(k, b)| (b.2, k as u32))
+        .chain(big.iter().enumerate().map(|(k, b)| (b.2, OTHER | k as u32)))
+        .collect();
+    order.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for &(_, k) in &order {
+        let rect = if k & OTHER == 0 {
+            big_triangles[k as usize].0.rect
+        } else {
+            big[(k & !OTHER) as usize].0.rect()
+        };
+        put_in_bins(&mut bins, rect, k);
     }
     let depth = depth_of_key(view.transform());
     let mut tile_buffer = Box::new(TileBuffer {
@@ -438,17 +455,8 @@ fn draw_band_impl<L: Lanes>(
                 continue;
             };
             let mut t = t.with_farthest(&mut tb.farthest);
-            // Nearest first, so the blocks they fill hide the polygons behind them.
-            let bin = &mut bins[ty as usize * tiles_x + tx as usize];
-            let near = |k: u32| {
-                if k & OTHER == 0 {
-                    big_triangles[k as usize].2
-                } else {
-                    big[(k & !OTHER) as usize].2
-                }
-            };
-            bin.sort_unstable_by(|&a, &b| near(b).total_cmp(&near(a)));
-            for &k in bin.iter() {
+            // Nearest first (the bins' order).
+            for &k in &bins[ty as usize * tiles_x + tx as usize] {
                 if k & OTHER == 0 {
                     let (s, face, _) = &big_triangles[k as usize];
                     block::draw(l, s, tile, Align::Grid, &mut t, *face, &mut counts);
