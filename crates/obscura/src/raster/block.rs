@@ -258,6 +258,15 @@ fn lanes<T: Copy + Default>(f: impl Fn(usize) -> T) -> [T; 8] {
     o
 }
 
+/// `v as u32` for a whole number `v` in `0..2^32`: adding `2^52` puts it in the low
+/// bits of the mantissa, exactly. The compiler turns this into vector instructions,
+/// which it does not do for the conversion to an unsigned integer (four of them per
+/// lane of [`triangles8`] were scalar).
+#[inline(always)]
+fn whole_to_u32(v: f64) -> u32 {
+    (v + 4_503_599_627_370_496.0).to_bits() as u32
+}
+
 /// [`triangle`] for eight triangles at once: lane `l` of the result holds what
 /// `triangle` gives for triangle `l` (bit for bit: each lane evaluates the same
 /// expressions in the same order), and is valid exactly when `triangle` gives a setup.
@@ -273,10 +282,10 @@ pub fn triangles8(p: &TrianglePoints, fill: FillRule, width: u32, height: u32) -
     let miny = lanes(|l| y[0][l].min(y[1][l]).min(y[2][l]));
     let maxy = lanes(|l| y[0][l].max(y[1][l]).max(y[2][l]));
     let (w, h) = (f64::from(width), f64::from(height));
-    let x0 = lanes(|l| (minx[l] - 0.5).ceil().max(0.0).min(w) as u32);
-    let y0 = lanes(|l| (miny[l] - 0.5).ceil().max(0.0).min(h) as u32);
-    let x1 = lanes(|l| ((maxx[l] - 0.5).floor() + 1.0).max(0.0).min(w) as u32);
-    let y1 = lanes(|l| ((maxy[l] - 0.5).floor() + 1.0).max(0.0).min(h) as u32);
+    let x0 = lanes(|l| whole_to_u32((minx[l] - 0.5).ceil().max(0.0).min(w)));
+    let y0 = lanes(|l| whole_to_u32((miny[l] - 0.5).ceil().max(0.0).min(h)));
+    let x1 = lanes(|l| whole_to_u32(((maxx[l] - 0.5).floor() + 1.0).max(0.0).min(w)));
+    let y1 = lanes(|l| whole_to_u32(((maxy[l] - 0.5).floor() + 1.0).max(0.0).min(h)));
     // The fan area from vertex 0, as `coverage::fan_area2` sums it.
     let ax = lanes(|l| x[1][l] - x[0][l]);
     let ay = lanes(|l| y[1][l] - y[0][l]);
@@ -1195,6 +1204,16 @@ mod tests {
             }
         }
         assert!(narrow > 1000 && wide > 300, "{narrow} narrow, {wide} wide");
+    }
+
+    #[test]
+    fn whole_numbers_convert_as_the_cast_does() {
+        let mut rng = SplitMix64(5);
+        let specials = [0.0, -0.0, 1.0, 1920.0, 16384.0, 65535.0, 4_294_967_295.0];
+        let random = (0..10_000).map(|_| (rng.next_u64() >> 32) as f64);
+        for v in specials.into_iter().chain(random) {
+            assert_eq!(whole_to_u32(v), v as u32, "{v}");
+        }
     }
 
     #[test]
