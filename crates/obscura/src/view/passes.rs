@@ -6,6 +6,10 @@
 //!
 //! Each decision is computed by the expressions of the stage-per-pass pipeline it
 //! replaced (kept as `prepare_reference` in the tests, which compare the two).
+//!
+//! On one thread, the vertex pass runs compiled for AVX2 when the processor has it:
+//! the same operations (the compiler never fuses a multiply and an add), 4.10 -> 3.90
+//! ms for the whole preparation of the Sponza atrium view (minimum of 6x40 runs).
 
 use glam::{DMat4, DVec3};
 
@@ -112,6 +116,28 @@ pub(super) fn transform_vertices(
         return (vertices, codes);
     }
     let _ = threads;
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: AVX2 was just detected.
+        unsafe {
+            transform_serial_avx2(scene, visible, &model_views, t, &mut vertices, &mut codes)
+        };
+        return (vertices, codes);
+    }
+    transform_serial(scene, visible, &model_views, t, &mut vertices, &mut codes);
+    (vertices, codes)
+}
+
+/// The serial vertex pass: the vertices of the visible objects in order.
+#[inline(always)]
+fn transform_serial(
+    scene: &Scene,
+    visible: &[(usize, bool)],
+    model_views: &[DMat4],
+    t: &ViewTransform,
+    vertices: &mut Vec<ViewVertex>,
+    codes: &mut Vec<u8>,
+) {
     for (slot, &(k, _)) in visible.iter().enumerate() {
         let mv = &model_views[slot];
         for &p in scene.objects()[k].mesh.positions() {
@@ -120,7 +146,21 @@ pub(super) fn transform_vertices(
             codes.push(c);
         }
     }
-    (vertices, codes)
+}
+
+/// [`transform_serial`] compiled for AVX2 (same operations, so the same results: the
+/// compiler does not fuse multiplies and adds).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn transform_serial_avx2(
+    scene: &Scene,
+    visible: &[(usize, bool)],
+    model_views: &[DMat4],
+    t: &ViewTransform,
+    vertices: &mut Vec<ViewVertex>,
+    codes: &mut Vec<u8>,
+) {
+    transform_serial(scene, visible, model_views, t, vertices, codes);
 }
 
 /// What the face pass reads.
@@ -351,4 +391,47 @@ fn process_faces_parallel(ctx: &FaceContext<'_>, face_total: usize, threads: usi
         out.clipped += part.clipped;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Camera, Viewport};
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_avx2_vertex_pass_equals_the_portable_one() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        // The default demo from a camera that sees some vertices and not others
+        // (outcodes, NaN screen positions), and every object in the pass.
+        let scene = crate::scene::demo::default_scene();
+        let cam = Camera::perspective(
+            DVec3::new(0.7, 1.3, 2.2),
+            DVec3::new(0.2, 0.0, -0.4),
+            DVec3::Y,
+            50.0,
+            0.1,
+            30.0,
+        );
+        let t = ViewTransform::new(&cam, Viewport::new(160, 90).unwrap());
+        let visible: Vec<(usize, bool)> = (0..scene.objects().len()).map(|k| (k, true)).collect();
+        let model_views: Vec<DMat4> = visible
+            .iter()
+            .map(|&(k, _)| t.view * scene.objects()[k].transform)
+            .collect();
+        let (mut v1, mut c1, mut v2, mut c2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        transform_serial(&scene, &visible, &model_views, &t, &mut v1, &mut c1);
+        // SAFETY: AVX2 was just detected.
+        unsafe { transform_serial_avx2(&scene, &visible, &model_views, &t, &mut v2, &mut c2) };
+        assert!(v1.len() > 100 && c1.iter().any(|&c| c != 0) && c1.iter().any(|&c| c == 0));
+        assert_eq!(c1, c2);
+        let bits = |v: &[ViewVertex]| -> Vec<[u64; 6]> {
+            v.iter()
+                .map(|v| [v.x, v.y, v.zq, v.eye.x, v.eye.y, v.eye.z].map(f64::to_bits))
+                .collect()
+        };
+        assert_eq!(bits(&v1), bits(&v2));
+    }
 }
