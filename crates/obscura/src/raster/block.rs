@@ -745,8 +745,8 @@ fn draw_column<L: Lanes, const E: usize, const WIDE: bool>(
     while y < r.y1 {
         let py = l.add_scalar(lane, f64::from(y) + 0.5);
         let mut row = [[0.0; 8]; E];
-        for k in 0..E {
-            row[k] = l.to_array(l.mul(l.splat(s.sdx[k]), l.sub_scalar(py, s.oy[k])));
+        for (row, (&sdx, &oy)) in row.iter_mut().zip(s.sdx.iter().zip(&s.oy)) {
+            *row = l.to_array(l.mul(l.splat(sdx), l.sub_scalar(py, oy)));
         }
         let zr = l.to_array(l.add_scalar(
             l.mul(
