@@ -241,12 +241,15 @@ fn faces_of(
         let or = if inside {
             0
         } else {
-            let (mut and, mut or) = (0x3f, 0);
-            for &i in poly {
-                let c = codes[(base + i) as usize];
-                and &= c;
-                or |= c;
-            }
+            let code = |i: u32| codes[(base + i) as usize];
+            let (and, or) = if let &[a, b, c] = poly {
+                // Triangles, most faces: three independent loads, no loop.
+                let (a, b, c) = (code(a), code(b), code(c));
+                (a & b & c, a | b | c)
+            } else {
+                poly.iter()
+                    .fold((0x3f, 0), |(and, or), &i| (and & code(i), or | code(i)))
+            };
             if and != 0 {
                 continue;
             }
@@ -254,7 +257,11 @@ fn faces_of(
         };
         out.kept += 1;
         if or == 0 {
-            out.indices.extend(poly.iter().map(|&i| base + i));
+            if let &[a, b, c] = poly {
+                out.indices.extend([base + a, base + b, base + c]);
+            } else {
+                out.indices.extend(poly.iter().map(|&i| base + i));
+            }
         } else {
             out.to_clip += 1;
             s.input.clear();
