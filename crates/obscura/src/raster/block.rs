@@ -26,12 +26,14 @@
 //!   by block, 15.1 ms row by row with scalar row parts, 12.9 ms with row parts in
 //!   lanes.
 //! - Blocks: a wider polygon is walked block by block; each block is first
-//!   classified by its corner samples. Every step of the edge expression is monotonic in `px` along a row and in `py` along a column, so
-//!   the sample of a block that is most inside an edge (resp. most outside) is a
-//!   corner chosen by the signs of `sdy` and `sdx`: if that corner is outside some
-//!   edge no sample of the block is covered (the block is skipped), and if the other
-//!   corner is inside every edge all are (the block is drawn without edge tests). The
-//!   classification is exact, not conservative.
+//!   classified by its corner samples. Every step of the edge expression is monotonic
+//!   in `px` along a row and in `py` along a column, so the sample of a block that is
+//!   most inside an edge (resp. most outside) is a corner chosen by the signs of `sdy`
+//!   and `sdx`: if that corner is outside some edge no sample of the block is covered
+//!   (the block is skipped), and if the other corner is inside every edge all are (the
+//!   block is drawn without edge tests). The classification is exact, not
+//!   conservative. Both walks draw rows with the same function (`draw_block`), so a
+//!   pixel's coverage and key do not depend on the walk.
 //! - Depth: the seeds' plane of the depth key, evaluated per pixel:
 //!   `z(i, j) = (z0 + dzdy (j - y0)) + dzdx (i - x0)` from the key `z0` at the first
 //!   sample `(x0 + 0.5, y0 + 0.5)` of the polygon's rectangle, in `f64`. A pixel's key
@@ -417,32 +419,12 @@ impl<'a> BlockTarget<'a> {
         self
     }
 
-    /// Whether the polygon `s` wins no pixel of `c`, a part of the grid block at
-    /// `(bx, by)`, by the blocks' keys.
-    #[inline(always)]
-    fn hides<const E: usize>(&self, s: &BlockSetup<E>, bx: u32, by: u32, c: PixelRect) -> bool {
-        if self.farthest.is_empty() || bx < self.x0 || by < self.y0 {
-            return false;
-        }
-        let per_row = self.stride / (2 * BLOCK as usize);
-        let at =
-            ((by - self.y0) / BLOCK) as usize * per_row + ((bx - self.x0) / (2 * BLOCK)) as usize;
-        let Some(&far) = self.farthest.get(at) else {
-            return false;
-        };
-        // `!(far > 0)`: an empty pixel (key 0) or a NaN hides nothing.
-        if !(far > 0.0) {
-            return false;
-        }
-        far > nearest_key(s, c)
-    }
-
     /// Whether the polygon `s` wins no pixel of `c` (pixels of the target), by the
     /// keys of all the grid blocks `c` overlaps: their smallest farthest key is
-    /// larger than any key the polygon has in `c`. One test for a polygon's whole
-    /// part in a tile, before its blocks are walked.
+    /// larger than any key the polygon has in `c`. Used for a polygon's whole part in
+    /// a tile before its blocks are walked, then for each block.
     #[inline(always)]
-    fn hides_all<const E: usize>(&self, s: &BlockSetup<E>, c: PixelRect) -> bool {
+    fn hides<const E: usize>(&self, s: &BlockSetup<E>, c: PixelRect) -> bool {
         if self.farthest.is_empty() || c.is_empty() || c.x0 < self.x0 || c.y0 < self.y0 {
             return false;
         }
@@ -677,112 +659,26 @@ pub fn draw<L: Lanes, const E: usize>(
     if r.is_empty() {
         return;
     }
+    // A narrow polygon: row by row from its first column, every row tested against
+    // the edges, without classifying blocks (its blocks are almost all partly covered).
+    let (rows, lanes) = (r.y0..r.y1, lane_range(0, r.x1 - r.x0));
     if align == Align::Polygon && r.x1 - r.x0 <= BLOCK {
-        draw_column::<L, E, false>(l, s, r, target, face, counts);
+        draw_block::<L, E, false, false>(l, s, r.x0, rows, lanes, target, face, counts);
     } else if align == Align::Polygon && r.x1 - r.x0 <= 2 * BLOCK {
-        draw_column::<L, E, true>(l, s, r, target, face, counts);
+        draw_block::<L, E, true, false>(l, s, r.x0, rows, lanes, target, face, counts);
     } else {
         let (bx0, by0) = match align {
             Align::Polygon => (r.x0, r.y0),
             Align::Grid => (r.x0 & !(2 * BLOCK - 1), r.y0 & !(BLOCK - 1)),
         };
-        draw_blocks::<L, E, true>(l, s, r, bx0, by0, target, face, counts);
+        draw_blocks::<L, E>(l, s, r, bx0, by0, target, face, counts);
     }
 }
 
-/// [`draw`] for a polygon at most 16 (`WIDE`) or 8 columns wide, in `r` (its pixels in
-/// the region and the target): row after row from its first column, every row's
-/// samples tested against the edges, without classifying blocks (a narrow polygon's
-/// blocks are almost all partly covered). The expressions are [`draw_block`]'s, so the
-/// coverage and the keys are too.
-#[inline(always)]
-fn draw_column<L: Lanes, const E: usize, const WIDE: bool>(
-    l: L,
-    s: &BlockSetup<E>,
-    r: PixelRect,
-    target: &mut BlockTarget<'_>,
-    face: u32,
-    counts: &mut Counts,
-) {
-    let lanes = lane_range(0, r.x1 - r.x0);
-    let stride = target.stride;
-    let mut at = target.at(r.x0, r.y0);
-    let reach = 16 - lanes.leading_zeros() as usize;
-    let rows = (r.y1 - r.y0) as usize;
-    // The depth tests below access the pixels of `lanes` in every row without checking
-    // them: check the last row once.
-    if lanes == 0
-        || rows == 0
-        || at + (rows - 1) * stride + reach > target.keys.len().min(target.ids.len())
-    {
-        return;
-    }
-    let lane = l.load(&LANE);
-    let dx = f64::from(r.x0) - f64::from(s.rect.x0);
-    let dzdx = l.splat(s.dzdx);
-    let zc = [
-        l.mul(dzdx, l.add_scalar(lane, dx)),
-        l.mul(dzdx, l.add_scalar(lane, dx + 8.0)),
-    ];
-    let px = l.add_scalar(lane, f64::from(r.x0) + 0.5);
-    let px_hi = l.add_scalar(lane, f64::from(r.x0) + 8.5);
-    let mut col_lo = [px; E];
-    let mut col_hi = [px; E];
-    let mut bound = [px; E];
-    for k in 0..E {
-        let sdy = l.splat(s.sdy[k]);
-        col_lo[k] = l.mul(sdy, l.sub_scalar(px, s.ox[k]));
-        if WIDE {
-            col_hi[k] = l.mul(sdy, l.sub_scalar(px_hi, s.ox[k]));
-        }
-        bound[k] = l.splat(s.bound[k]);
-    }
-    let (lanes_lo, lanes_hi) = (lanes as u8, (lanes >> 8) as u8);
-    let (keys, ids) = (&mut *target.keys, &mut *target.ids);
-    // Rows eight at a time: their edge and depth parts as lanes (stored, then read
-    // as broadcasts from memory: no shuffle per row).
-    let mut y = r.y0;
-    while y < r.y1 {
-        let py = l.add_scalar(lane, f64::from(y) + 0.5);
-        let mut row = [[0.0; 8]; E];
-        for (row, (&sdx, &oy)) in row.iter_mut().zip(s.sdx.iter().zip(&s.oy)) {
-            *row = l.to_array(l.mul(l.splat(sdx), l.sub_scalar(py, oy)));
-        }
-        let zr = l.to_array(l.add_scalar(
-            l.mul(
-                l.splat(s.dzdy),
-                l.add_scalar(lane, f64::from(y) - f64::from(s.rect.y0)),
-            ),
-            s.z0,
-        ));
-        let n = ((r.y1 - y) as usize).min(8);
-        for q in 0..n {
-            let mut lo = lanes_lo;
-            let mut hi = lanes_hi;
-            for k in 0..E {
-                lo &= l.less(0xff, l.sub_scalar(col_lo[k], row[k][q]), bound[k]);
-                if WIDE {
-                    hi &= l.less(0xff, l.sub_scalar(col_hi[k], row[k][q]), bound[k]);
-                }
-            }
-            let cover = u16::from(lo) | if WIDE { u16::from(hi) << 8 } else { 0 };
-            // No branch on an empty row (thin polygons have many, unpredictably): the
-            // masked test of no pixel accesses nothing.
-            counts.tested += u64::from(cover.count_ones());
-            // SAFETY: `cover` is within `lanes`, whose pixels in this row are inside
-            // the slices (checked above for the last row).
-            let taken = unsafe { test_row::<L, WIDE>(l, keys, ids, at, cover, zc, zr[q], face) };
-            counts.written += u64::from(taken.count_ones());
-            at += stride;
-        }
-        y += 8;
-    }
-}
-
-/// [`draw`] with blocks of 16 (`WIDE`) or 8 columns and 8 rows from `(bx0, by0)`.
+/// [`draw`] with blocks of 16 columns and 8 rows from `(bx0, by0)`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn draw_blocks<L: Lanes, const E: usize, const WIDE: bool>(
+fn draw_blocks<L: Lanes, const E: usize>(
     l: L,
     s: &BlockSetup<E>,
     r: PixelRect,
@@ -792,24 +688,13 @@ fn draw_blocks<L: Lanes, const E: usize, const WIDE: bool>(
     face: u32,
     counts: &mut Counts,
 ) {
-    let bw = if WIDE { 2 * BLOCK } else { BLOCK };
+    let bw = 2 * BLOCK;
     if r.x1 - bx0 <= bw && r.y1 - by0 <= BLOCK {
         let lanes = lane_range(r.x0 - bx0, r.x1 - bx0);
-        draw_block::<L, E, WIDE>(
-            l,
-            s,
-            bx0,
-            by0,
-            r.y0..r.y1,
-            lanes,
-            false,
-            target,
-            face,
-            counts,
-        );
+        draw_block::<L, E, true, false>(l, s, bx0, r.y0..r.y1, lanes, target, face, counts);
         return;
     }
-    if WIDE && target.hides_all(s, r) {
+    if target.hides(s, r) {
         return;
     }
     let edges = EdgeLanes::new(l, s);
@@ -831,7 +716,7 @@ fn draw_blocks<L: Lanes, const E: usize, const WIDE: bool>(
                 x1: cx1,
                 y1: cy1,
             };
-            if WIDE && target.hides(s, bx, by, c) {
+            if target.hides(s, c) {
                 bx += bw;
                 continue;
             }
@@ -846,8 +731,12 @@ fn draw_blocks<L: Lanes, const E: usize, const WIDE: bool>(
                 };
             let lanes = lane_range(cx0 - bx, cx1 - bx);
             let written = counts.written;
-            draw_block::<L, E, WIDE>(l, s, bx, by, cy0..cy1, lanes, full, target, face, counts);
-            if WIDE && counts.written != written {
+            if full {
+                draw_block::<L, E, true, true>(l, s, bx, cy0..cy1, lanes, target, face, counts);
+            } else {
+                draw_block::<L, E, true, false>(l, s, bx, cy0..cy1, lanes, target, face, counts);
+            }
+            if counts.written != written {
                 target.refresh(bx, by);
             }
             bx += bw;
@@ -856,23 +745,36 @@ fn draw_blocks<L: Lanes, const E: usize, const WIDE: bool>(
     }
 }
 
-/// Draws rows `rows` of the block at `(bx, by)`, in the lanes `lanes` (columns
-/// `bx + l`; 16 of them when `WIDE`, else 8); `full` when every such sample is known
-/// to be covered.
+/// Draws the rows `rows` (any number) of the columns `bx + l` for the lanes `l` of
+/// `lanes` (16 of them when `WIDE`, else 8); `FULL` when every such sample is known to
+/// be covered. The rows' edge and depth parts are computed eight rows at a time in
+/// lanes and read back as broadcasts from memory (see the module doc).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn draw_block<L: Lanes, const E: usize, const WIDE: bool>(
+fn draw_block<L: Lanes, const E: usize, const WIDE: bool, const FULL: bool>(
     l: L,
     s: &BlockSetup<E>,
     bx: u32,
-    by: u32,
     rows: std::ops::Range<u32>,
     lanes: u16,
-    full: bool,
     target: &mut BlockTarget<'_>,
     face: u32,
     counts: &mut Counts,
 ) {
+    if lanes == 0 || rows.is_empty() {
+        return;
+    }
+    let stride = target.stride;
+    let mut at = target.at(bx, rows.start);
+    let (keys, ids) = (&mut *target.keys, &mut *target.ids);
+    // The depth tests below access the pixels of `lanes` in `rows` without checking
+    // them: check the last row once. (The callers clip the rows to the target, so
+    // this never fails.)
+    let reach = 16 - lanes.leading_zeros() as usize;
+    let last_row = (rows.end - rows.start - 1) as usize;
+    if at + last_row * stride + reach > keys.len().min(ids.len()) {
+        return;
+    }
     let lane = l.load(&LANE);
     // Depth: the column part per lane, the row part per row.
     let dx = f64::from(bx) - f64::from(s.rect.x0);
@@ -883,82 +785,69 @@ fn draw_block<L: Lanes, const E: usize, const WIDE: bool>(
     } else {
         zc_lo
     };
-    let zr = l.to_array(l.add_scalar(
-        l.mul(
-            l.splat(s.dzdy),
-            l.add_scalar(lane, f64::from(by) - f64::from(s.rect.y0)),
-        ),
-        s.z0,
-    ));
-    let stride = target.stride;
-    let mut at = target.at(bx, rows.start);
-    let first = (rows.start - by) as usize;
-    let last = ((rows.end - by) as usize).min(8);
-    let (keys, ids) = (&mut *target.keys, &mut *target.ids);
-    // The depth tests below access the pixels of `lanes` in rows `first..last` without
-    // checking them: check the farthest one once. (The callers clip the block to the
-    // target, so this never fails.)
-    let reach = 16 - lanes.leading_zeros() as usize;
-    if lanes == 0
-        || first >= last
-        || at + (last - first - 1) * stride + reach > keys.len().min(ids.len())
-    {
-        return;
-    }
-    if full {
-        counts.tested += u64::from(lanes.count_ones()) * (last - first) as u64;
-        for &zj in &zr[first..last] {
-            // SAFETY: the pixels of `lanes` in this row are inside the slices (checked
-            // above for the farthest row).
-            let taken =
-                unsafe { test_row::<L, WIDE>(l, keys, ids, at, lanes, [zc_lo, zc_hi], zj, face) };
-            counts.written += u64::from(taken.count_ones());
-            at += stride;
-        }
-        return;
-    }
     // Coverage: per edge the column part `sdy (px - ox)` per lane and the row part
     // `sdx (py - oy)` per row. (Loops, not closures: a closure is not compiled for the
     // caller's instruction set, so the lane operations in it would not be inlined.)
     // Sample positions are small integers plus a half: exact.
     let px = l.add_scalar(lane, f64::from(bx) + 0.5);
     let px_hi = l.add_scalar(lane, f64::from(bx) + 8.5);
-    let py = l.add_scalar(lane, f64::from(by) + 0.5);
     let mut col_lo = [px; E];
     let mut col_hi = [px; E];
-    let mut row = [[0.0; 8]; E];
     let mut bound = [px; E];
-    for k in 0..E {
-        let sdy = l.splat(s.sdy[k]);
-        col_lo[k] = l.mul(sdy, l.sub_scalar(px, s.ox[k]));
-        if WIDE {
-            col_hi[k] = l.mul(sdy, l.sub_scalar(px_hi, s.ox[k]));
+    if !FULL {
+        for k in 0..E {
+            let sdy = l.splat(s.sdy[k]);
+            col_lo[k] = l.mul(sdy, l.sub_scalar(px, s.ox[k]));
+            if WIDE {
+                col_hi[k] = l.mul(sdy, l.sub_scalar(px_hi, s.ox[k]));
+            }
+            bound[k] = l.splat(s.bound[k]);
         }
-        row[k] = l.to_array(l.mul(l.splat(s.sdx[k]), l.sub_scalar(py, s.oy[k])));
-        bound[k] = l.splat(s.bound[k]);
     }
     let (lanes_lo, lanes_hi) = (lanes as u8, (lanes >> 8) as u8);
-    for j in first..last {
-        let mut lo = lanes_lo;
-        let mut hi = lanes_hi;
-        // Independent compares, their masks combined after (a chain of masked compares
-        // would wait for each other).
-        for k in 0..E {
-            lo &= l.less(0xff, l.sub_scalar(col_lo[k], row[k][j]), bound[k]);
-            if WIDE {
-                hi &= l.less(0xff, l.sub_scalar(col_hi[k], row[k][j]), bound[k]);
+    let mut y = rows.start;
+    while y < rows.end {
+        let zr = l.to_array(l.add_scalar(
+            l.mul(
+                l.splat(s.dzdy),
+                l.add_scalar(lane, f64::from(y) - f64::from(s.rect.y0)),
+            ),
+            s.z0,
+        ));
+        let mut row = [[0.0; 8]; E];
+        if !FULL {
+            let py = l.add_scalar(lane, f64::from(y) + 0.5);
+            for (row, (&sdx, &oy)) in row.iter_mut().zip(s.sdx.iter().zip(&s.oy)) {
+                *row = l.to_array(l.mul(l.splat(sdx), l.sub_scalar(py, oy)));
             }
         }
-        let cover = u16::from(lo) | if WIDE { u16::from(hi) << 8 } else { 0 };
-        // No branch on an empty row: the masked test of no pixel accesses nothing.
-        counts.tested += u64::from(cover.count_ones());
-        let zj = zr[j];
-        // SAFETY: `cover` is within `lanes`, whose pixels in this row are inside the
-        // slices (checked above for the farthest row).
-        let taken =
-            unsafe { test_row::<L, WIDE>(l, keys, ids, at, cover, [zc_lo, zc_hi], zj, face) };
-        counts.written += u64::from(taken.count_ones());
-        at += stride;
+        for (q, &zj) in zr.iter().enumerate().take((rows.end - y) as usize) {
+            let cover = if FULL {
+                lanes
+            } else {
+                let mut lo = lanes_lo;
+                let mut hi = lanes_hi;
+                // Independent compares, their masks combined after (a chain of masked
+                // compares would wait for each other).
+                for k in 0..E {
+                    lo &= l.less(0xff, l.sub_scalar(col_lo[k], row[k][q]), bound[k]);
+                    if WIDE {
+                        hi &= l.less(0xff, l.sub_scalar(col_hi[k], row[k][q]), bound[k]);
+                    }
+                }
+                u16::from(lo) | if WIDE { u16::from(hi) << 8 } else { 0 }
+            };
+            // No branch on an empty row (thin polygons have many, unpredictably): the
+            // masked test of no pixel accesses nothing.
+            counts.tested += u64::from(cover.count_ones());
+            // SAFETY: `cover` is within `lanes`, whose pixels in these rows are inside
+            // the slices (checked above for the last row).
+            let taken =
+                unsafe { test_row::<L, WIDE>(l, keys, ids, at, cover, [zc_lo, zc_hi], zj, face) };
+            counts.written += u64::from(taken.count_ones());
+            at += stride;
+        }
+        y += BLOCK;
     }
 }
 
@@ -1150,8 +1039,8 @@ mod tests {
     #[test]
     fn narrow_polygons_drawn_row_by_row_cover_the_samples_of_the_rule() {
         // Polygons at most 16 pixels wide drawn with `Align::Polygon` take the
-        // row-by-row walk (`draw_column`); with `Align::Grid` the block walk, which
-        // classifies blocks. Both must give exactly the pixels whose sample the
+        // row-by-row walk; with `Align::Grid` the block walk, which classifies blocks
+        // (and skips the edge tests in covered ones). Both must give exactly the pixels whose sample the
         // per-pixel rule covers, with the same keys.
         let mut rng = SplitMix64(23);
         let (w, h) = (120, 80);
