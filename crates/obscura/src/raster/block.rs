@@ -1,5 +1,6 @@
-//! Block rasterization: a convex polygon drawn into a depth buffer 8x8 pixels at a
-//! time, eight pixels (one row of a block) per lane vector, generic over [`Lanes`].
+//! Block rasterization: a convex polygon drawn into a depth buffer row by row (narrow
+//! polygons) or in blocks of 16x8 pixels, eight pixels per lane vector, generic over
+//! [`Lanes`].
 //!
 //! - Input: a polygon set up once ([`BlockSetup`]: its edges in the form below, its
 //!   sample rectangle, its depth-key plane), a region of the image (a tile, a band of
@@ -41,8 +42,9 @@
 //!   blocks, tiles or bands. It differs from the reference's serial stepping
 //!   `z += dz/dx` by a few units in the last place of the `f64`: the `f32` keys differ
 //!   at most where the reference's keys are within one `f32` unit of each other.
-//! - Complexity: per polygon O(n) setup for n edges; per 8x8 block O(n) to classify
-//!   it, then per row O(n) for a partly covered block and O(1) for a covered one. The
+//! - Complexity: per polygon O(n) setup for n edges; per row O(n) in the row walk;
+//!   in the block walk, per block O(n) to classify it, then per row O(n) for a partly
+//!   covered block and O(1) for a covered one. The
 //!   part of the polygon in the region is classified first, as one block: a covered
 //!   tile is drawn without edge tests, an uncovered one costs nothing more.
 //! - Occlusion culling (optional, [`BlockTarget::with_farthest`]): per block of the

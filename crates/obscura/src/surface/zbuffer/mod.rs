@@ -20,8 +20,9 @@
 //! [`PolygonCoverage`](crate::raster::PolygonCoverage) per polygon, the depth stepped
 //! serially along each span. [`render`] computes the same picture faster with the block
 //! rasterizer of [`crate::raster::block`]:
-//! - coverage by the same canonical edge expression, bit for bit, 8x8 blocks classified
-//!   exactly by their corners (covered blocks drawn without edge tests);
+//! - coverage by the same canonical edge expression, bit for bit: narrow polygons row
+//!   by row, wider ones in 16x8 blocks classified exactly by their corners (covered
+//!   blocks drawn without edge tests);
 //! - the depth key evaluated per pixel from the plane (no serial chain, so any pixel
 //!   in any order, eight or sixteen per instruction) instead of stepped along the span;
 //! - the depth test takes the nearer key and, on an exactly equal key, the lower face
