@@ -144,6 +144,34 @@ impl ViewTransform {
         }
     }
 
+    /// How a stored (`f32`) depth key becomes the eye-space depth a [`crate::Frame`]
+    /// holds: one rule for every hidden-surface algorithm, so that the same key gives
+    /// the same depth bit for bit whichever algorithm drew it.
+    #[inline]
+    #[must_use]
+    pub fn key_depths(&self) -> crate::raster::lanes::DepthOfKey {
+        use crate::raster::lanes::DepthOfKey;
+        if self.orthographic {
+            DepthOfKey::Orthographic {
+                far: self.far,
+                range: self.far - self.near,
+            }
+        } else {
+            DepthOfKey::Perspective {
+                near: self.near as f32,
+            }
+        }
+    }
+
+    /// The eye-space depth a frame stores for the stored depth key `key` (see
+    /// [`Self::key_depths`]); within a unit in the last place of
+    /// `depth_of_zq(key) as f32`.
+    #[inline]
+    #[must_use]
+    pub fn depth_of_key(&self, key: f32) -> f32 {
+        self.key_depths().depth(key)
+    }
+
     /// The eye-space depth of a depth key.
     #[inline]
     #[must_use]

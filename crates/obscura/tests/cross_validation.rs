@@ -257,6 +257,19 @@ fn near_tie(view: &PreparedView<'_>, i: u32, j: u32) -> bool {
 }
 
 /// Checks one algorithm on every view; returns how many views were compared.
+/// Whether the algorithm draws the z-buffer's stored depth keys (so its depths must be
+/// the z-buffer's exactly, see [`obscura::view::ViewTransform::depth_of_key`]).
+fn stores_keys(algorithm: Algorithm) -> bool {
+    !matches!(
+        algorithm,
+        Algorithm::Raycast
+            | Algorithm::RaycastBounds
+            | Algorithm::RaycastBvh
+            | Algorithm::RaycastGrid
+            | Algorithm::Octree
+    )
+}
+
 fn check_algorithm(algorithm: Algorithm, cases: &[Case]) -> usize {
     let vp = Viewport::new(u64::from(WIDTH), u64::from(HEIGHT)).unwrap();
     let mut views = 0;
@@ -283,6 +296,23 @@ fn check_algorithm(algorithm: Algorithm, cases: &[Case]) -> usize {
                 .iter()
                 .filter(|&&(x, y, _, _)| !near_tie(&view, x, y))
                 .collect();
+            // The algorithms that store the z-buffer's `f32` keys must give its depths
+            // bit for bit where they show the same face (ray casting measures depth
+            // along its rays instead).
+            if stores_keys(algorithm) {
+                let off = (0..frame.ids.len())
+                    .filter(|&k| {
+                        frame.ids[k] == reference.ids[k]
+                            && frame.depth[k].to_bits() != reference.depth[k].to_bits()
+                    })
+                    .count();
+                if off > 0 {
+                    failures.push(format!(
+                        "{algorithm} on \"{}\" camera {k}: {off} pixels show the z-buffer's face with another depth",
+                        c.name
+                    ));
+                }
+            }
             let agree = 1.0 - diff.len() as f64 / vp.pixel_count() as f64;
             if agree < 0.999 || !real.is_empty() {
                 failures.push(format!(

@@ -150,8 +150,7 @@ impl Painter {
                     let k = row + x as usize;
                     if self.frame.ids[k] == BACKGROUND {
                         self.frame.ids[k] = face;
-                        self.frame.depth[k] =
-                            self.transform.depth_of_zq(f64::from(z as f32)) as f32;
+                        self.frame.depth[k] = self.transform.depth_of_key(z as f32);
                         self.block_uncovered[block_row + (x / BLOCK) as usize] -= 1;
                         row_written += 1;
                     }
@@ -161,7 +160,7 @@ impl Painter {
             } else {
                 for k in row + x0 as usize..row + x1 as usize {
                     self.frame.ids[k] = face;
-                    self.frame.depth[k] = self.transform.depth_of_zq(f64::from(z as f32)) as f32;
+                    self.frame.depth[k] = self.transform.depth_of_key(z as f32);
                     z += plane.dzdx;
                 }
                 row_written = x1 - x0;

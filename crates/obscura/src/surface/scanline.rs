@@ -77,7 +77,7 @@ pub(crate) mod screen_faces;
 use std::ops::Range;
 
 use crate::Result;
-use crate::frame::{BACKGROUND, Frame};
+use crate::frame::Frame;
 use crate::raster::DepthPlane;
 use crate::raster::row_span;
 use crate::surface::{RenderOptions, Stats};
@@ -379,16 +379,10 @@ fn fill_keys(frame: &mut Frame, y: u32, x0: u32, x1: u32, plane: &DepthPlane, fa
 
 /// Turns the stored keys and complemented ids into eye-space depths and face ids, in
 /// one pass at the end rather than a division per pixel while spans are drawn: where
-/// the id is 0 (no face drawn) the background (`+inf`, [`BACKGROUND`]). Every pixel's
-/// depth is computed and the background's discarded by a select, without a branch:
-/// the loop then runs on vector lanes.
+/// the id is 0 (no face drawn) the background (`+inf`, [`crate::frame::BACKGROUND`]). It is the
+/// z-buffer's own resolve (in lanes), so the two give the same depth for the same key.
 fn keys_to_depths(frame: &mut Frame, t: &ViewTransform) {
-    for (d, id) in frame.depth.iter_mut().zip(&mut frame.ids) {
-        let depth = t.depth_of_zq(f64::from(*d)) as f32;
-        let drawn = *id != 0;
-        *d = if drawn { depth } else { f32::INFINITY };
-        *id = if drawn { !*id } else { BACKGROUND };
-    }
+    crate::surface::zbuffer::resolve_frame(frame, t);
 }
 
 impl Scanner<'_> {

@@ -191,7 +191,7 @@ pub(crate) fn fill_run(
     let mut z = plane.at(f64::from(x0) + 0.5, f64::from(y) + 0.5);
     frame.ids[a..b].fill(face);
     for d in &mut frame.depth[a..b] {
-        *d = t.depth_of_zq(f64::from(z as f32)) as f32;
+        *d = t.depth_of_key(z as f32);
         z += plane.dzdx;
     }
 }
@@ -201,7 +201,7 @@ pub(crate) fn fill_run(
 pub(crate) fn set_pixel(frame: &mut Frame, t: &ViewTransform, x: u32, y: u32, face: u32, key: f32) {
     let k = frame.index(x, y);
     frame.ids[k] = face;
-    frame.depth[k] = t.depth_of_zq(f64::from(key)) as f32;
+    frame.depth[k] = t.depth_of_key(key);
 }
 
 #[cfg(test)]

@@ -406,7 +406,7 @@ fn draw_band_impl<L: Lanes>(
         };
         put_in_bins(&mut bins, rect, k);
     }
-    let depth = depth_of_key(view.transform());
+    let depth = view.transform().key_depths();
     let mut tile_buffer = Box::new(TileBuffer {
         keys: [0.0; (TILE * TILE) as usize],
         ids: [0; (TILE * TILE) as usize],
@@ -475,18 +475,25 @@ fn draw_band_impl<L: Lanes>(
     }
 }
 
-/// How keys become depths for this view.
-fn depth_of_key(t: &ViewTransform) -> DepthOfKey {
-    if t.orthographic {
-        DepthOfKey::Orthographic {
-            far: t.far,
-            range: t.far - t.near,
-        }
-    } else {
-        DepthOfKey::Perspective {
-            near: t.near as f32,
-        }
+/// Turns a whole frame of keys and encoded ids (`!id`, 0 where nothing was drawn)
+/// into depths and face ids, as the z-buffer's own tiles are resolved: the same
+/// [`Lanes::resolve_in_place`], with the fastest kernel this processor runs, so an
+/// algorithm that stores keys gives the z-buffer's depths bit for bit.
+pub(crate) fn resolve_frame(frame: &mut Frame, t: &ViewTransform) {
+    let depth = t.key_depths();
+    #[cfg(target_arch = "x86_64")]
+    if let Some(l) = Avx512::new() {
+        // SAFETY: `Avx512::new` checked the instructions `resolve_frame_avx512` enables.
+        unsafe { resolve_frame_avx512(l, frame, depth) };
+        return;
     }
+    Portable.resolve_in_place(&mut frame.depth, &mut frame.ids, depth);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+fn resolve_frame_avx512(l: Avx512, frame: &mut Frame, depth: DepthOfKey) {
+    l.resolve_in_place(&mut frame.depth, &mut frame.ids, depth);
 }
 
 fn draw_band_portable(

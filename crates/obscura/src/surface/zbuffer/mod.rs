@@ -62,6 +62,7 @@ use crate::view::PreparedView;
 use crate::{Frame, Result};
 
 pub use fast::Kernel;
+pub(crate) use fast::resolve_frame;
 
 /// Renders a prepared view with the z-buffer (the fast implementation; same result as
 /// [`render_reference`]).
@@ -174,7 +175,7 @@ pub fn render_reference(
     let t = view.transform();
     for (d, (&z, &id)) in frame.depth.iter_mut().zip(zbuf.iter().zip(&frame.ids)) {
         if id != BACKGROUND {
-            *d = t.depth_of_zq(f64::from(z)) as f32;
+            *d = t.depth_of_key(z);
         }
     }
     Ok((frame, c.stats(view)))
