@@ -565,7 +565,7 @@ impl Scanner<'_> {
                     continue;
                 }
             }
-            let p = &f.plane;
+            let p = &faces.info[slot as usize].plane;
             self.unsorted.push(Crossing {
                 x: lo,
                 data: (self.entering.len() as u32) << 1 | 1,

@@ -60,8 +60,6 @@ pub(crate) struct ScanFace {
     pub overflow: bool,
     /// Its active edges, the first `count`.
     pub edges: [ScanEdge; FACE_EDGES],
-    /// Its depth-key plane.
-    pub plane: DepthPlane,
     /// The last row of its sample box.
     pub last_row: u32,
 }
@@ -401,7 +399,6 @@ impl Faces {
             slot: s,
             overflow: false,
             edges: [ScanEdge::NONE; FACE_EDGES],
-            plane,
             last_row: rect.y1 - 1,
         });
         self.slot_of[polygon as usize] = s;
