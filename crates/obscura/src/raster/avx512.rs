@@ -175,6 +175,49 @@ impl Lanes for Avx512 {
     }
 
     #[inline(always)]
+    unsafe fn depth_test_pair(
+        self,
+        keys: &mut [f32],
+        ids: &mut [u32],
+        at: usize,
+        stride: usize,
+        cover: u8,
+        z: __m512d,
+        face: u32,
+    ) -> u8 {
+        // SAFETY: as in `depth_test16`: the accesses are masked by `cover` or a subset
+        // of it, row by row (lanes 0-3 the first row, 4-7 the second).
+        unsafe {
+            let (kp, ip) = (
+                keys.as_mut_ptr().wrapping_add(at),
+                ids.as_mut_ptr().wrapping_add(at),
+            );
+            let (kq, iq) = (kp.wrapping_add(stride), ip.wrapping_add(stride));
+            let (c0, c1) = (cover & 15, cover >> 4);
+            let key = _mm256_max_ps(_mm256_set1_ps(MIN_KEY), _mm512_cvtpd_ps(z));
+            let old = _mm256_insertf128_ps::<1>(
+                _mm256_castps128_ps256(_mm_maskz_loadu_ps(c0, kp)),
+                _mm_maskz_loadu_ps(c1, kq),
+            );
+            let mut take = _mm256_mask_cmp_ps_mask::<_CMP_GT_OQ>(cover, key, old);
+            let tie = _mm256_mask_cmp_ps_mask::<_CMP_EQ_OQ>(cover, key, old);
+            let face4 = _mm_set1_epi32(face as i32);
+            if tie != 0 {
+                let old_ids = _mm256_inserti128_si256::<1>(
+                    _mm256_castsi128_si256(_mm_maskz_loadu_epi32(tie & 15, ip.cast::<i32>())),
+                    _mm_maskz_loadu_epi32(tie >> 4, iq.cast::<i32>()),
+                );
+                take |= _mm256_mask_cmpgt_epu32_mask(tie, _mm256_set1_epi32(face as i32), old_ids);
+            }
+            _mm_mask_storeu_ps(kp, take & 15, _mm256_castps256_ps128(key));
+            _mm_mask_storeu_ps(kq, take >> 4, _mm256_extractf128_ps::<1>(key));
+            _mm_mask_storeu_epi32(ip.cast::<i32>(), take & 15, face4);
+            _mm_mask_storeu_epi32(iq.cast::<i32>(), take >> 4, face4);
+            take
+        }
+    }
+
+    #[inline(always)]
     fn resolve(
         self,
         keys: &[f32],

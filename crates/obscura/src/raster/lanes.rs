@@ -131,6 +131,23 @@ pub trait Lanes: Copy {
         face: u32,
     ) -> u8;
 
+    /// [`Lanes::depth_test8`] for two rows of four pixels: lane `l < 4` is pixel
+    /// `at + l`, lane `l >= 4` pixel `at + stride + l - 4`.
+    ///
+    /// # Safety
+    /// Every pixel of a bit of `cover` is inside both slices.
+    #[allow(clippy::too_many_arguments)]
+    unsafe fn depth_test_pair(
+        self,
+        keys: &mut [f32],
+        ids: &mut [u32],
+        at: usize,
+        stride: usize,
+        cover: u8,
+        z: Self::F,
+        face: u32,
+    ) -> u8;
+
     /// Turns keys and encoded ids into depths and face ids: `depth(key)` and `!id`
     /// where the id is not 0, `+inf` and [`BACKGROUND`](crate::frame::BACKGROUND)
     /// where it is. The four slices have the same length (else the shortest counts).
@@ -287,6 +304,33 @@ impl Lanes for Portable {
     ) -> u8 {
         // SAFETY: the portable test checks every index itself.
         unsafe { self.depth_test16(keys, ids, at, u16::from(cover), z, z, face) as u8 }
+    }
+
+    #[inline(always)]
+    unsafe fn depth_test_pair(
+        self,
+        keys: &mut [f32],
+        ids: &mut [u32],
+        at: usize,
+        stride: usize,
+        cover: u8,
+        z: [f64; 8],
+        face: u32,
+    ) -> u8 {
+        let mut taken = 0u8;
+        for (l, &zl) in z.iter().enumerate() {
+            let i = at + (l >> 2) * stride + (l & 3);
+            if cover >> l & 1 == 0 || i >= keys.len().min(ids.len()) {
+                continue;
+            }
+            let k = key_of(zl);
+            if takes(k, face, keys[i], ids[i]) {
+                keys[i] = k;
+                ids[i] = face;
+                taken |= 1 << l;
+            }
+        }
+        taken
     }
 
     #[inline(always)]
