@@ -379,8 +379,9 @@ fn fill_keys(frame: &mut Frame, y: u32, x0: u32, x1: u32, plane: &DepthPlane, fa
 
 /// Turns the stored keys and complemented ids into eye-space depths and face ids, in
 /// one pass at the end rather than a division per pixel while spans are drawn: where
-/// the id is 0 (no face drawn) the background (`+inf`, [`crate::frame::BACKGROUND`]). It is the
-/// z-buffer's own resolve (in lanes), so the two give the same depth for the same key.
+/// the id is 0 (no face drawn) the background (`+inf`,
+/// [`crate::frame::BACKGROUND`]). It is the z-buffer's own resolve (in lanes), so the
+/// two give the same depth for the same key.
 fn keys_to_depths(frame: &mut Frame, t: &ViewTransform) {
     crate::surface::zbuffer::resolve_frame(frame, t);
 }
