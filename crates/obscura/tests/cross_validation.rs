@@ -296,9 +296,11 @@ fn check_algorithm(algorithm: Algorithm, cases: &[Case]) -> usize {
                 .iter()
                 .filter(|&&(x, y, _, _)| !near_tie(&view, x, y))
                 .collect();
-            // The algorithms that store the z-buffer's `f32` keys must give its depths
-            // bit for bit where they show the same face (ray casting measures depth
-            // along its rays instead).
+            // The algorithms that store `f32` depth keys share the z-buffer's rule from
+            // key to depth, so where they show the same face their depths must be its
+            // depths bit for bit. (Their keys come from the same plane evaluated in
+            // `f64` in another order; on these scenes that never reaches the `f32`
+            // rounding. Ray casting measures depth along its rays instead.)
             if stores_keys(algorithm) {
                 let off = (0..frame.ids.len())
                     .filter(|&k| {
