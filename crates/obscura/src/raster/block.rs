@@ -768,20 +768,14 @@ fn draw_block<L: Lanes, const E: usize, const WIDE: bool, const FULL: bool>(
     face: u32,
     counts: &mut Counts,
 ) {
-    if lanes == 0 || rows.is_empty() {
+    if lanes == 0 {
         return;
     }
+    let Some(mut at) = rows_start(target, bx, &rows, 16 - lanes.leading_zeros() as usize) else {
+        return;
+    };
     let stride = target.stride;
-    let mut at = target.at(bx, rows.start);
     let (keys, ids) = (&mut *target.keys, &mut *target.ids);
-    // The depth tests below access the pixels of `lanes` in `rows` without checking
-    // them: check the last row once. (The callers clip the rows to the target, so
-    // this never fails.)
-    let reach = 16 - lanes.leading_zeros() as usize;
-    let last_row = (rows.end - rows.start - 1) as usize;
-    if at + last_row * stride + reach > keys.len().min(ids.len()) {
-        return;
-    }
     let lane = l.load(&LANE);
     // Depth: the column part per lane, the row part per row.
     let dx = f64::from(bx) - f64::from(s.rect.x0);
@@ -798,17 +792,11 @@ fn draw_block<L: Lanes, const E: usize, const WIDE: bool, const FULL: bool>(
     // Sample positions are small integers plus a half: exact.
     let px = l.add_scalar(lane, f64::from(bx) + 0.5);
     let px_hi = l.add_scalar(lane, f64::from(bx) + 8.5);
-    let mut col_lo = [px; E];
-    let mut col_hi = [px; E];
-    let mut bound = [px; E];
+    let (mut col_lo, mut col_hi, mut bound) = ([px; E], [px; E], [px; E]);
     if !FULL {
-        for k in 0..E {
-            let sdy = l.splat(s.sdy[k]);
-            col_lo[k] = l.mul(sdy, l.sub_scalar(px, s.ox[k]));
-            if WIDE {
-                col_hi[k] = l.mul(sdy, l.sub_scalar(px_hi, s.ox[k]));
-            }
-            bound[k] = l.splat(s.bound[k]);
+        (col_lo, bound) = edge_columns(l, s, px);
+        if WIDE {
+            col_hi = edge_columns(l, s, px_hi).0;
         }
     }
     let (lanes_lo, lanes_hi) = (lanes as u8, (lanes >> 8) as u8);
@@ -858,6 +846,40 @@ fn draw_block<L: Lanes, const E: usize, const WIDE: bool, const FULL: bool>(
     }
 }
 
+/// Where the first of `rows` starts at column `bx` in the target, if every row of
+/// `rows` holds its pixels `bx..bx + reach` inside the target's slices: the depth tests
+/// of the row walks then access them without checking. Only the last row needs the
+/// check. (The callers clip the rows to the target, so it never fails.)
+#[inline(always)]
+fn rows_start(
+    target: &BlockTarget<'_>,
+    bx: u32,
+    rows: &std::ops::Range<u32>,
+    reach: usize,
+) -> Option<usize> {
+    let last_row = rows.end.checked_sub(rows.start)?.checked_sub(1)? as usize;
+    let at = target.at(bx, rows.start);
+    let end = at + last_row * target.stride + reach;
+    (end <= target.keys.len().min(target.ids.len())).then_some(at)
+}
+
+/// Per edge, the column part `sdy (px - ox)` of the edge expression at the lanes'
+/// sample columns `px`, and the edge's bound, in lanes. (A loop, not a closure: a
+/// closure is not compiled for the caller's instruction set.)
+#[inline(always)]
+fn edge_columns<L: Lanes, const E: usize>(
+    l: L,
+    s: &BlockSetup<E>,
+    px: L::F,
+) -> ([L::F; E], [L::F; E]) {
+    let (mut col, mut bound) = ([px; E], [px; E]);
+    for k in 0..E {
+        col[k] = l.mul(l.splat(s.sdy[k]), l.sub_scalar(px, s.ox[k]));
+        bound[k] = l.splat(s.bound[k]);
+    }
+    (col, bound)
+}
+
 /// Polygons at most this many pixels wide are drawn two rows per lane vector.
 const PAIR_WIDTH: u32 = 4;
 /// The column of each lane in [`draw_pairs`].
@@ -884,31 +906,20 @@ fn draw_pairs<L: Lanes, const E: usize>(
     counts: &mut Counts,
 ) {
     let lanes = lanes & 15;
-    if lanes == 0 || rows.is_empty() {
+    if lanes == 0 {
         return;
     }
+    let Some(mut at) = rows_start(target, bx, &rows, 8 - lanes.leading_zeros() as usize) else {
+        return;
+    };
     let stride = target.stride;
-    let mut at = target.at(bx, rows.start);
     let (keys, ids) = (&mut *target.keys, &mut *target.ids);
-    // The depth tests below access the pixels of `lanes` in `rows` without checking
-    // them: check the last row once (the callers clip the rows to the target).
-    let reach = 8 - lanes.leading_zeros() as usize;
-    let last_row = (rows.end - rows.start - 1) as usize;
-    if at + last_row * stride + reach > keys.len().min(ids.len()) {
-        return;
-    }
     let (column, row_of) = (l.load(&PAIR_COLUMN), l.load(&PAIR_ROW));
     let zc = l.mul(
         l.splat(s.dzdx),
         l.add_scalar(column, f64::from(bx) - f64::from(s.rect.x0)),
     );
-    let px = l.add_scalar(column, f64::from(bx) + 0.5);
-    let mut col = [px; E];
-    let mut bound = [px; E];
-    for k in 0..E {
-        col[k] = l.mul(l.splat(s.sdy[k]), l.sub_scalar(px, s.ox[k]));
-        bound[k] = l.splat(s.bound[k]);
-    }
+    let (col, bound) = edge_columns(l, s, l.add_scalar(column, f64::from(bx) + 0.5));
     let mut y = rows.start;
     while y < rows.end {
         // The second row only if there is one.

@@ -275,21 +275,8 @@ impl Lanes for Portable {
         hi: [f64; 8],
         face: u32,
     ) -> u16 {
-        let n = keys.len().min(ids.len()).saturating_sub(at).min(16);
-        let cover = cover & lanes_below16(n);
-        let mut taken = 0u16;
-        for l in 0..n {
-            if cover >> l & 1 == 0 {
-                continue;
-            }
-            let k = key_of(if l < 8 { lo[l] } else { hi[l - 8] });
-            if takes(k, face, keys[at + l], ids[at + l]) {
-                keys[at + l] = k;
-                ids[at + l] = face;
-                taken |= 1 << l;
-            }
-        }
-        taken
+        let z = |l: usize| if l < 8 { lo[l] } else { hi[l - 8] };
+        test_pixels(keys, ids, cover, 16, |l| at.saturating_add(l), z, face)
     }
 
     #[inline(always)]
@@ -317,20 +304,8 @@ impl Lanes for Portable {
         z: [f64; 8],
         face: u32,
     ) -> u8 {
-        let mut taken = 0u8;
-        for (l, &zl) in z.iter().enumerate() {
-            let i = at + (l >> 2) * stride + (l & 3);
-            if cover >> l & 1 == 0 || i >= keys.len().min(ids.len()) {
-                continue;
-            }
-            let k = key_of(zl);
-            if takes(k, face, keys[i], ids[i]) {
-                keys[i] = k;
-                ids[i] = face;
-                taken |= 1 << l;
-            }
-        }
-        taken
+        let pixel = |l: usize| at.saturating_add((l >> 2) * stride + (l & 3));
+        test_pixels(keys, ids, u16::from(cover), 8, pixel, |l| z[l], face) as u8
     }
 
     #[inline(always)]
@@ -363,6 +338,36 @@ impl Lanes for Portable {
             *id = !*id;
         }
     }
+}
+
+/// The portable depth test of lanes `0..lanes` (see [`Lanes::depth_test16`]): lane `l`
+/// of `cover` is pixel `pixel(l)`, its key [`key_of`]`(z(l))`; a pixel outside the
+/// slices is skipped. Returns the lanes taken.
+#[inline(always)]
+fn test_pixels(
+    keys: &mut [f32],
+    ids: &mut [u32],
+    cover: u16,
+    lanes: usize,
+    pixel: impl Fn(usize) -> usize,
+    z: impl Fn(usize) -> f64,
+    face: u32,
+) -> u16 {
+    let n = keys.len().min(ids.len());
+    let mut taken = 0u16;
+    for l in 0..lanes {
+        let i = pixel(l);
+        if cover >> l & 1 == 0 || i >= n {
+            continue;
+        }
+        let k = key_of(z(l));
+        if takes(k, face, keys[i], ids[i]) {
+            keys[i] = k;
+            ids[i] = face;
+            taken |= 1 << l;
+        }
+    }
+    taken
 }
 
 #[cfg(test)]

@@ -84,8 +84,9 @@ fn transform_vertices8(
     p: &[DVec3; 8],
 ) -> ([ViewVertex; 8], [u8; 8]) {
     use crate::clip::{OUT_BOTTOM, OUT_FAR, OUT_LEFT, OUT_NEAR, OUT_RIGHT, OUT_TOP};
-    let lanes = |f: &dyn Fn(&DVec3) -> f64| -> [f64; 8] { std::array::from_fn(|l| f(&p[l])) };
-    let (px, py, pz) = (lanes(&|v| v.x), lanes(&|v| v.y), lanes(&|v| v.z));
+    let px: [f64; 8] = std::array::from_fn(|l| p[l].x);
+    let py: [f64; 8] = std::array::from_fn(|l| p[l].y);
+    let pz: [f64; 8] = std::array::from_fn(|l| p[l].z);
     // `DMat4::transform_point3`: x_axis px, then y_axis py + that, z_axis pz + that,
     // w_axis + that.
     let point = |k: usize| -> [f64; 8] {
