@@ -256,7 +256,6 @@ fn near_tie(view: &PreparedView<'_>, i: u32, j: u32) -> bool {
         .is_some_and(|w| (w[1] - w[0]).abs() <= DEPTH_TIE * w[0].abs().max(1e-12))
 }
 
-/// Checks one algorithm on every view; returns how many views were compared.
 /// Whether the algorithm draws the z-buffer's stored depth keys (so its depths must be
 /// the z-buffer's exactly, see [`obscura::view::ViewTransform::depth_of_key`]).
 fn stores_keys(algorithm: Algorithm) -> bool {
@@ -270,6 +269,7 @@ fn stores_keys(algorithm: Algorithm) -> bool {
     )
 }
 
+/// Checks one algorithm on every view; returns how many views were compared.
 fn check_algorithm(algorithm: Algorithm, cases: &[Case]) -> usize {
     let vp = Viewport::new(u64::from(WIDTH), u64::from(HEIGHT)).unwrap();
     let mut views = 0;

@@ -66,28 +66,15 @@ pub const OUT_FAR: u8 = 1 << 5;
 #[inline]
 #[must_use]
 pub fn outcode_homogeneous(v: DVec4) -> u8 {
-    let mut c = 0;
-    if v.x < -v.w {
-        c |= OUT_LEFT;
-    }
-    if v.x > v.w {
-        c |= OUT_RIGHT;
-    }
-    if v.y < -v.w {
-        c |= OUT_BOTTOM;
-    }
-    if v.y > v.w {
-        c |= OUT_TOP;
-    }
-    if v.z < -v.w {
-        c |= OUT_NEAR;
-    }
-    if v.z > v.w {
-        c |= OUT_FAR;
-    }
+    // Without branches (each bit is a compare and a select), so that a caller
+    // transforming points lane by lane keeps them in vector lanes.
+    let bit = |out: bool, code: u8| if out { code } else { 0 };
+    let c = bit(v.x < -v.w, OUT_LEFT)
+        | bit(v.x > v.w, OUT_RIGHT)
+        | bit(v.y < -v.w, OUT_BOTTOM)
+        | bit(v.y > v.w, OUT_TOP)
+        | bit(v.z < -v.w, OUT_NEAR)
+        | bit(v.z > v.w, OUT_FAR);
     // NaN coordinates fail every comparison: count them as outside everything.
-    if v.is_nan() {
-        c = 0x3f;
-    }
-    c
+    if v.is_nan() { 0x3f } else { c }
 }
