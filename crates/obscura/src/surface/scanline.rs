@@ -10,9 +10,12 @@
 //!
 //! # How it runs here
 //! - Edge table: every non-horizontal edge of every prepared polygon, bucketed by the
-//!   first row whose sample line (`y = j + 0.5`) it meets. A polygon's coverage and
-//!   depth plane are set up when its first edge enters, and dropped when its last edge
-//!   leaves, so memory follows the faces under the scanline.
+//!   first row whose sample line (`y = j + 0.5`) it meets, filled as the scan goes
+//!   down: the polygons are bucketed by the first row of their sample box (where their
+//!   first edges start), and on that row each is set up (coverage and depth plane)
+//!   and its edges placed, those starting there in the active edge list and the
+//!   others in their rows' buckets. A face is dropped when its last edge leaves, so
+//!   memory follows the faces under the scanline.
 //! - Per row: new edges join the active edge list, held by their face (see
 //!   `faces`); each steps `x += 1/m` and settles its exact crossing pixel: from `x`
 //!   alone when `x` is provably far enough from every pixel centre, else with the
@@ -51,15 +54,16 @@
 //! `spans_per_pixel`, `depth_comparisons`, `comparisons_skipped_by_coherence`,
 //! `order_checks`, `orders_proven`, `crossing_corrections` (pixels the incremental
 //! `x` was off), `span_fallbacks`, and
-//! the milliseconds of each stage: `table_ms` (building the edge table), `enter_ms`
-//! (new edges and the setup of their faces), `sweep_ms` (crossings settled, spans),
+//! the milliseconds of each stage: `table_ms` (bucketing the polygons), `enter_ms`
+//! (the setup of new faces, the placing of their edges, new edges), `sweep_ms` (crossings settled, spans),
 //! `sort_ms` (crossings sorted) and `walk_ms` (spans decided and drawn).
 //!
-//! Complexity: O(E + H) to build the table (E edges, H rows), then per row O(A + W)
+//! Complexity: O(P + E + H) to fill the table (P polygons, E edges, H rows), then per
+//! row O(A + W)
 //! for the A active edges and W columns, per span O(1) when the kept nearest face
 //! decides it and O(k) for its k faces otherwise, and O(k) per pixel only in spans
-//! decided pixel by pixel. Every pixel is written once. Memory: 12 bytes per edge in
-//! the table, plus the active faces.
+//! decided pixel by pixel. Every pixel is written once. Memory: 4 bytes per polygon
+//! in the table, 12 per edge waiting in it, plus the active faces.
 //!
 //! Limitations: depth is exact for planar polygons (every prepared polygon is);
 //! near-ties are decided on the `f32` keys the z-buffer stores, so the two agree
@@ -259,6 +263,8 @@ struct Scanner<'v> {
     transform: &'v ViewTransform,
     width: u32,
     frame: Frame,
+    /// The edges of a face being set up that start on its first row.
+    now: Vec<(u32, u32)>,
     /// The live faces with their active edges: the active edge list, by face.
     faces: Faces,
     /// The crossings of this row as the faces give them, then sorted by pixel.
@@ -284,13 +290,14 @@ fn run(
     // and ids are stored complemented (0 is "nothing drawn") until `keys_to_depths`.
     let frame = Frame::zeroed(vp)?;
     let start = std::time::Instant::now();
-    let table = EdgeTable::build(view, vp.width, vp.height);
+    let mut table = EdgeTable::build(view, vp.width, vp.height);
     let table_seconds = start.elapsed().as_secs_f64();
     let mut s = Scanner {
         view,
         transform: view.transform(),
         width: vp.width,
         frame,
+        now: Vec::new(),
         faces: Faces::new(view.polygon_count(), options.fill_rule, vp.width, vp.height),
         unsorted: Vec::new(),
         crossings: Vec::new(),
@@ -323,7 +330,7 @@ fn run(
                 spans: Vec::new(),
             });
         }
-        s.row(y, &table);
+        s.row(y, &mut table);
         if let Some(t) = s.trace.take() {
             traces.push(t);
         }
@@ -389,7 +396,7 @@ fn keys_to_depths(frame: &mut Frame, t: &ViewTransform) {
 impl Scanner<'_> {
     /// One scanline: new edges, the sweep of the active edge list (crossings settled,
     /// spans of the faces, their crossings), the crossings sorted, and the walk.
-    fn row(&mut self, y: u32, table: &EdgeTable) {
+    fn row(&mut self, y: u32, table: &mut EdgeTable) {
         let t0 = std::time::Instant::now();
         self.enter_edges(y, table);
         let t1 = std::time::Instant::now();
@@ -414,58 +421,79 @@ impl Scanner<'_> {
         }
     }
 
-    /// Sets up the edges of the table that start on row `y` (and their faces, when
-    /// their first edge arrives) and adds them to the active edge list.
-    fn enter_edges(&mut self, y: u32, table: &EdgeTable) {
-        let py = f64::from(y) + 0.5;
-        let bucket = table.bucket(y);
+    /// Sets up the polygons whose box starts on row `y` and places their edges in the
+    /// table, and adds the edges that start on row `y` to the active edge list.
+    fn enter_edges(&mut self, y: u32, table: &mut EdgeTable) {
+        let view = self.view;
+        let (starts, indices, _) = view.polygon_arrays();
+        let vertices = view.vertices();
         // Touch the first vertex of each polygon set up on this row first: their cache
         // misses then overlap here instead of stalling the setups one after another.
         let mut touched = 0.0;
-        let (starts, indices, _) = self.view.polygon_arrays();
-        let vertices = self.view.vertices();
-        for &TableEdge { polygon, .. } in bucket {
-            if self.faces.slot_of[polygon as usize] == NONE {
-                let first = starts
-                    .get(polygon as usize)
-                    .and_then(|&k| indices.get(k as usize));
-                touched += first
-                    .and_then(|&v| vertices.get(v as usize))
-                    .map_or(0.0, |v| v.x);
-            }
+        for &polygon in table.polygons(y) {
+            let first = starts
+                .get(polygon as usize)
+                .and_then(|&k| indices.get(k as usize));
+            touched += first
+                .and_then(|&v| vertices.get(v as usize))
+                .map_or(0.0, |v| v.x);
         }
         std::hint::black_box(touched);
+        let mut now = std::mem::take(&mut self.now);
+        for k in 0..table.polygons(y).len() {
+            let polygon = table.polygons(y)[k];
+            let s = self.faces.activate(view, polygon);
+            if s == DEAD {
+                continue;
+            }
+            now.clear();
+            let rect = self.faces.info[s as usize].rect;
+            debug_assert_eq!(rect.y0, y);
+            table.place(view, polygon, (rect.y0, rect.y1), |pair, last_row| {
+                now.push((pair, last_row));
+            });
+            for &(pair, last_row) in &now {
+                self.add_table_edge(s, y, pair, last_row);
+            }
+        }
+        self.now = now;
+        let later = table.take_later(y);
         for &TableEdge {
             polygon,
             pair,
             last_row,
-        } in bucket
+        } in &later
         {
-            let mut s = self.faces.slot_of[polygon as usize];
-            if s == NONE {
-                s = self.faces.activate(self.view, polygon);
+            let s = self.faces.slot_of[polygon as usize];
+            if s != NONE && s != DEAD {
+                self.add_table_edge(s, y, pair, last_row);
             }
-            if s == DEAD {
-                continue;
-            }
-            let Some(k) = self.faces.edges.edge_of_pair(s, pair) else {
-                continue;
-            };
-            let e = self.faces.edges.of(s)[k as usize];
-            debug_assert!(e.dy > 0.0 && last_row >= y);
-            let inverse_slope = e.dx / e.dy;
-            self.faces.add_edge(
-                s,
-                y,
-                ScanEdge {
-                    x: e.ox + (py - e.oy) * inverse_slope,
-                    inverse_slope,
-                    tolerance: tolerance(&e, inverse_slope, last_row - y + 1),
-                    last_row,
-                    index_left: ScanEdge::index_left(k, e.sign < 0.0),
-                },
-            );
         }
+        table.give_back(later);
+    }
+
+    /// Adds edge `pair` of the live face in slot `s`, active from row `y` to
+    /// `last_row`, to the active edge list.
+    #[inline]
+    fn add_table_edge(&mut self, s: u32, y: u32, pair: u32, last_row: u32) {
+        let Some(k) = self.faces.edges.edge_of_pair(s, pair) else {
+            return;
+        };
+        let e = self.faces.edges.of(s)[k as usize];
+        debug_assert!(e.dy > 0.0 && last_row >= y);
+        let py = f64::from(y) + 0.5;
+        let inverse_slope = e.dx / e.dy;
+        self.faces.add_edge(
+            s,
+            y,
+            ScanEdge {
+                x: e.ox + (py - e.oy) * inverse_slope,
+                inverse_slope,
+                tolerance: tolerance(&e, inverse_slope, last_row - y + 1),
+                last_row,
+                index_left: ScanEdge::index_left(k, e.sign < 0.0),
+            },
+        );
     }
 
     /// One pass over the live faces, in memory order. For each: its edges whose last

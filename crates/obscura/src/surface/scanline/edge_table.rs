@@ -10,11 +10,14 @@
 //! sample box has its edges. Horizontal edges never cross a sample line and stay out
 //! of the table: whether a row lying on one is covered is settled by the span check.
 //!
-//! The table holds only `(polygon, edge, last row)` (12 bytes an edge): the rows an
-//! edge is active on are found once, here, with the polygon's sample box. An edge's
-//! function and slope are set up when it enters the active list, from its polygon's
-//! data made when the polygon's first edge enters. Memory therefore follows the active
-//! faces, not the scene.
+//! The table is filled as the scan goes down ([`EdgeTable`]): the polygons are
+//! bucketed by the first row of their sample box, and a polygon's edges are placed
+//! when it is set up, on that row. An edge waiting for a later row takes `(polygon,
+//! edge, last row)` (12 bytes). An edge's function and slope are set up when it enters
+//! the active list, from its polygon's data. Memory therefore follows the active
+//! faces, not the scene. Building the whole table first (every edge with its rows, in
+//! the polygons' order, then sorted by row) wrote 12 MB for Sponza's 443k edges and
+//! cost more than placing the edges as their polygons are set up.
 
 use crate::raster::EdgeFunction;
 #[cfg(doc)]
@@ -197,11 +200,26 @@ pub(crate) struct TableEdge {
     pub last_row: u32,
 }
 
-/// Edges bucketed by their first active row (flat arrays).
+/// The edge table, bucketed by row and filled as the scan goes down: the polygons
+/// bucketed by the first row of their sample box (flat arrays, one entry a polygon),
+/// and per row the edges that start on it below their polygon's first row. A polygon's
+/// edges are placed when it is set up, on that first row: those starting there enter
+/// the active edge list at once ([`EdgeTable::place`]), the others wait in their row's
+/// bucket. The buckets hold exactly the edges of the seed's table, but it is never
+/// built whole: a polygon's vertices are read once for its box and once more when it
+/// is set up, and the table's memory follows the faces under the scanline.
 #[derive(Debug, Default)]
 pub(crate) struct EdgeTable {
+    /// Per row (and one past the last): where its polygons start in `polygons`.
     starts: Vec<u32>,
-    edges: Vec<TableEdge>,
+    /// The polygons with a sample box, by first row (in view order within a row).
+    polygons: Vec<u32>,
+    /// Per row: the edges waiting for it.
+    later: Vec<Vec<TableEdge>>,
+    /// Emptied buckets, kept for their memory.
+    spare: Vec<Vec<TableEdge>>,
+    /// Edges placed so far.
+    placed: usize,
 }
 
 /// The rows `first..=last` on which an edge from `ya` to `yb` (`ya < yb`) of a polygon
@@ -233,78 +251,109 @@ fn box_rows(poly: &ViewPolygon<'_>, width: u32, height: u32) -> Option<(u32, u32
     (x0 < x1 && y0 < y1).then_some((y0, y1))
 }
 
-/// Calls `f(pair, (first, last))` for each edge of a polygon with box rows `y0..y1`
-/// that is active on some row, `first..=last` being its rows.
-#[inline]
-fn for_each_edge(poly: &ViewPolygon<'_>, (y0, y1): (u32, u32), mut f: impl FnMut(u32, (u32, u32))) {
-    let n = poly.len();
-    for pair in 0..n {
-        let (p, q) = (poly.vertex(pair), poly.vertex((pair + 1) % n));
-        if p.y == q.y {
-            continue;
-        }
-        if let Some(rows) = edge_rows(p.y.min(q.y), p.y.max(q.y), y0, y1) {
-            f(pair as u32, rows);
-        }
-    }
-}
-
 impl EdgeTable {
-    /// The table of every non-horizontal edge of the view's polygons that meets a
-    /// sample line of a `width x height` image within its polygon's sample box: one
-    /// pass over the polygons (their vertices are read once, in memory order), then a
-    /// counting sort by first row.
+    /// The table of a `width x height` image: the view's polygons whose sample box
+    /// holds a sample, bucketed by its first row with a counting sort (one pass over
+    /// the polygons, their vertices read in memory order).
     pub fn build(view: &PreparedView<'_>, width: u32, height: u32) -> Self {
-        let mut placed: Vec<(u32, TableEdge)> = Vec::with_capacity(view.polygon_count() * 3);
-        for (k, poly) in view.polygons().enumerate() {
-            // The box the coverage rule will use; no box, no coverage.
-            if let Some(rows) = box_rows(&poly, width, height) {
-                for_each_edge(&poly, rows, |pair, (first, last_row)| {
-                    placed.push((
-                        first,
-                        TableEdge {
-                            polygon: k as u32,
-                            pair,
-                            last_row,
-                        },
-                    ));
-                });
-            }
-        }
-        // Bucket by first row with a counting sort (stable: polygon order in a bucket).
+        let mut first_rows: Vec<u32> = Vec::with_capacity(view.polygon_count());
         let mut starts = vec![0u32; height as usize + 1];
-        for &(row, _) in &placed {
-            starts[row as usize + 1] += 1;
+        for poly in view.polygons() {
+            let row = box_rows(&poly, width, height).map_or(u32::MAX, |(y0, _)| y0);
+            if row != u32::MAX {
+                starts[row as usize + 1] += 1;
+            }
+            first_rows.push(row);
         }
         for r in 0..height as usize {
             starts[r + 1] += starts[r];
         }
         let mut next = starts.clone();
-        let mut edges = vec![
-            TableEdge {
-                polygon: 0,
-                pair: 0,
-                last_row: 0,
-            };
-            placed.len()
-        ];
-        for &(row, e) in &placed {
-            let at = &mut next[row as usize];
-            edges[*at as usize] = e;
-            *at += 1;
+        let mut polygons = vec![0u32; starts[height as usize] as usize];
+        for (k, &row) in first_rows.iter().enumerate() {
+            if row != u32::MAX {
+                let at = &mut next[row as usize];
+                polygons[*at as usize] = k as u32;
+                *at += 1;
+            }
         }
-        EdgeTable { starts, edges }
+        EdgeTable {
+            starts,
+            polygons,
+            later: vec![Vec::new(); height as usize],
+            spare: Vec::new(),
+            placed: 0,
+        }
     }
 
-    /// Number of edges.
+    /// Number of edges placed so far (after the scan: every edge of every face set up
+    /// that meets a sample line in its box).
     pub fn len(&self) -> usize {
-        self.edges.len()
+        self.placed
     }
 
-    /// The edges that become active on `row`.
-    pub fn bucket(&self, row: u32) -> &[TableEdge] {
+    /// The polygons whose sample box starts on `row`.
+    pub fn polygons(&self, row: u32) -> &[u32] {
         let r = row as usize;
-        &self.edges[self.starts[r] as usize..self.starts[r + 1] as usize]
+        &self.polygons[self.starts[r] as usize..self.starts[r + 1] as usize]
+    }
+
+    /// Places the edges of polygon `polygon` (of the view), set up on the first row
+    /// of its sample box, whose rows are `rows`: calls `now(pair, last_row)` for each
+    /// edge active from that row on and puts the others in the buckets of their first
+    /// rows.
+    pub fn place(
+        &mut self,
+        view: &PreparedView<'_>,
+        polygon: u32,
+        rows: (u32, u32),
+        mut now: impl FnMut(u32, u32),
+    ) {
+        let (starts, indices, _) = view.polygon_arrays();
+        let vertices = view.vertices();
+        let (a, b) = (
+            starts[polygon as usize] as usize,
+            starts[polygon as usize + 1] as usize,
+        );
+        let ring = &indices[a..b];
+        let n = ring.len();
+        for (pair, &i) in ring.iter().enumerate() {
+            let j = ring[if pair + 1 == n { 0 } else { pair + 1 }];
+            let (py, qy) = (vertices[i as usize].y, vertices[j as usize].y);
+            if py == qy {
+                continue;
+            }
+            let Some((first, last_row)) = edge_rows(py.min(qy), py.max(qy), rows.0, rows.1) else {
+                continue;
+            };
+            self.placed += 1;
+            if first == rows.0 {
+                now(pair as u32, last_row);
+            } else {
+                let bucket = &mut self.later[first as usize];
+                if bucket.capacity() == 0
+                    && let Some(v) = self.spare.pop()
+                {
+                    *bucket = v;
+                }
+                bucket.push(TableEdge {
+                    polygon,
+                    pair: pair as u32,
+                    last_row,
+                });
+            }
+        }
+    }
+
+    /// Takes the edges waiting for `row` (give the bucket back with [`Self::give_back`]).
+    pub fn take_later(&mut self, row: u32) -> Vec<TableEdge> {
+        std::mem::take(&mut self.later[row as usize])
+    }
+
+    /// Returns an emptied bucket for reuse.
+    pub fn give_back(&mut self, mut bucket: Vec<TableEdge>) {
+        bucket.clear();
+        self.spare.push(bucket);
     }
 }
 
