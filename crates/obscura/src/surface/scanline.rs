@@ -449,7 +449,8 @@ impl Scanner<'_> {
             now.clear();
             let rect = self.faces.info[s as usize].rect;
             debug_assert_eq!(rect.y0, y);
-            table.place(view, polygon, (rect.y0, rect.y1), |pair, last_row| {
+            let ys = self.faces.triangle_ys;
+            table.place(view, polygon, ys, (rect.y0, rect.y1), |pair, last_row| {
                 now.push((pair, last_row));
             });
             for &(pair, last_row) in &now {

@@ -301,14 +301,22 @@ impl EdgeTable {
     /// Places the edges of polygon `polygon` (of the view), set up on the first row
     /// of its sample box, whose rows are `rows`: calls `now(pair, last_row)` for each
     /// edge active from that row on and puts the others in the buckets of their first
-    /// rows.
+    /// rows. `ys`: the `y` of its vertices when it is a triangle (read again from the
+    /// view otherwise).
     pub fn place(
         &mut self,
         view: &PreparedView<'_>,
         polygon: u32,
+        ys: Option<[f64; 3]>,
         rows: (u32, u32),
         mut now: impl FnMut(u32, u32),
     ) {
+        if let Some([a, b, c]) = ys {
+            for (pair, (p, q)) in [(a, b), (b, c), (c, a)].into_iter().enumerate() {
+                self.place_edge(polygon, pair as u32, p, q, rows, &mut now);
+            }
+            return;
+        }
         let (starts, indices, _) = view.polygon_arrays();
         let vertices = view.vertices();
         let (a, b) = (
@@ -319,29 +327,44 @@ impl EdgeTable {
         let n = ring.len();
         for (pair, &i) in ring.iter().enumerate() {
             let j = ring[if pair + 1 == n { 0 } else { pair + 1 }];
-            let (py, qy) = (vertices[i as usize].y, vertices[j as usize].y);
-            if py == qy {
-                continue;
+            let (p, q) = (vertices[i as usize].y, vertices[j as usize].y);
+            self.place_edge(polygon, pair as u32, p, q, rows, &mut now);
+        }
+    }
+
+    /// Places edge `pair` of `polygon`, from a vertex at `py` to one at `qy` (see
+    /// [`Self::place`]).
+    #[inline(always)]
+    fn place_edge(
+        &mut self,
+        polygon: u32,
+        pair: u32,
+        py: f64,
+        qy: f64,
+        rows: (u32, u32),
+        now: &mut impl FnMut(u32, u32),
+    ) {
+        if py == qy {
+            return;
+        }
+        let Some((first, last_row)) = edge_rows(py.min(qy), py.max(qy), rows.0, rows.1) else {
+            return;
+        };
+        self.placed += 1;
+        if first == rows.0 {
+            now(pair, last_row);
+        } else {
+            let bucket = &mut self.later[first as usize];
+            if bucket.capacity() == 0
+                && let Some(v) = self.spare.pop()
+            {
+                *bucket = v;
             }
-            let Some((first, last_row)) = edge_rows(py.min(qy), py.max(qy), rows.0, rows.1) else {
-                continue;
-            };
-            self.placed += 1;
-            if first == rows.0 {
-                now(pair as u32, last_row);
-            } else {
-                let bucket = &mut self.later[first as usize];
-                if bucket.capacity() == 0
-                    && let Some(v) = self.spare.pop()
-                {
-                    *bucket = v;
-                }
-                bucket.push(TableEdge {
-                    polygon,
-                    pair: pair as u32,
-                    last_row,
-                });
-            }
+            bucket.push(TableEdge {
+                polygon,
+                pair,
+                last_row,
+            });
         }
     }
 

@@ -186,6 +186,8 @@ pub(crate) struct Faces {
     fill: FillRule,
     width: u32,
     height: u32,
+    /// The `y` of the vertices of the last face set up, when it is a triangle.
+    pub triangle_ys: Option<[f64; 3]>,
 }
 
 const NO_EDGE: EdgeFunction = EdgeFunction {
@@ -290,6 +292,7 @@ impl Faces {
             fill,
             width,
             height,
+            triangle_ys: None,
         }
     }
 
@@ -326,8 +329,10 @@ impl Faces {
         self.edges.pair_edge[si].clear();
         let (w, h, fill) = (self.width, self.height, self.fill);
         let mut check = (0, u32::MAX);
+        self.triangle_ys = None;
         let set = if n == 3 {
             let p = [vertex(0), vertex(1), vertex(2)];
+            self.triangle_ys = Some([p[0].1, p[1].1, p[2].1]);
             TriangleSetup::new(p, fill, w, h).map(|TriangleSetup { edges, rect, plane }| {
                 self.edges.store(si, &edges);
                 let area2 =
