@@ -55,15 +55,15 @@
 //! `order_checks`, `orders_proven`, `crossing_corrections` (pixels the incremental
 //! `x` was off), `span_fallbacks`, and
 //! the milliseconds of each stage: `table_ms` (bucketing the polygons), `enter_ms`
-//! (the setup of new faces, the placing of their edges, new edges), `sweep_ms` (crossings settled, spans),
-//! `sort_ms` (crossings sorted) and `walk_ms` (spans decided and drawn).
+//! (the setup of new faces, the placing of their edges, new edges), `sweep_ms`
+//! (crossings settled, spans), `sort_ms` (crossings sorted) and `walk_ms` (spans
+//! decided and drawn).
 //!
 //! Complexity: O(P + E + H) to fill the table (P polygons, E edges, H rows), then per
-//! row O(A + W)
-//! for the A active edges and W columns, per span O(1) when the kept nearest face
-//! decides it and O(k) for its k faces otherwise, and O(k) per pixel only in spans
-//! decided pixel by pixel. Every pixel is written once. Memory: 4 bytes per polygon
-//! in the table, 12 per edge waiting in it, plus the active faces.
+//! row O(A + W) for the A active edges and W columns, per span O(1) when the kept
+//! nearest face decides it and O(k) for its k faces otherwise, and O(k) per pixel only
+//! in spans decided pixel by pixel. Every pixel is written once. Memory: 4 bytes per
+//! polygon in the table, 12 per edge waiting in it, plus the active faces.
 //!
 //! Limitations: depth is exact for planar polygons (every prepared polygon is);
 //! near-ties are decided on the `f32` keys the z-buffer stores, so the two agree

@@ -235,13 +235,25 @@ pub(crate) fn edge_rows(ya: f64, yb: f64, y0: u32, y1: u32) -> Option<(u32, u32)
 /// box holds no sample).
 #[inline]
 fn box_rows(poly: &ViewPolygon<'_>, width: u32, height: u32) -> Option<(u32, u32)> {
+    sample_rows(poly.vertices().map(|v| (v.x, v.y)), width, height)
+}
+
+/// The rows of the sample box of the points `(x, y)`, see [`box_rows`]. It must be the
+/// box of the face's setup: a face is set up on the first row of this box, and its
+/// edges are placed within the setup's rows (a test checks the two agree).
+#[inline]
+fn sample_rows(
+    points: impl Iterator<Item = (f64, f64)>,
+    width: u32,
+    height: u32,
+) -> Option<(u32, u32)> {
     let (mut minx, mut miny) = (f64::INFINITY, f64::INFINITY);
     let (mut maxx, mut maxy) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
-    for v in poly.vertices() {
-        minx = minx.min(v.x);
-        maxx = maxx.max(v.x);
-        miny = miny.min(v.y);
-        maxy = maxy.max(v.y);
+    for (x, y) in points {
+        minx = minx.min(x);
+        maxx = maxx.max(x);
+        miny = miny.min(y);
+        maxy = maxy.max(y);
     }
     if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
         return None;
@@ -453,6 +465,54 @@ mod tests {
         for (ox, dx) in [(6e8, 1.0), (100.0, 6e8), (-6e8, 5.0), (1e20, 0.0)] {
             assert_eq!(tolerance(&edge(ox, dx), dx / 10.0, 10), f64::INFINITY);
         }
+    }
+
+    #[test]
+    fn table_rows_are_the_rows_of_the_faces_setup() {
+        use crate::raster::{FillRule, PolygonSetup, TriangleSetup};
+        // Polygons of 3 to 8 vertices on ellipses of many sizes and places: sub-pixel,
+        // on sample lines, crossing the image's borders, off the image.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (w, h) = (64, 48);
+        let mut set_up = 0;
+        for case in 0..4000 {
+            let n = 3 + case % 6;
+            let (cx, cy) = (next() * 90.0 - 13.0, next() * 70.0 - 11.0);
+            let (rx, ry) = (next().powi(3) * 40.0, next().powi(3) * 30.0);
+            let snap = case % 4 == 0;
+            let turn = next() * 6.0;
+            let points: Vec<(f64, f64, f64)> = (0..n)
+                .map(|k| {
+                    let a = turn + k as f64 * std::f64::consts::TAU / n as f64;
+                    let (x, y) = (cx + rx * a.cos(), cy + ry * a.sin());
+                    let (x, y) = if snap {
+                        ((x * 2.0).round() / 2.0, (y * 2.0).round() / 2.0)
+                    } else {
+                        (x, y)
+                    };
+                    (x, y, 1.0)
+                })
+                .collect();
+            let rows = sample_rows(points.iter().map(|p| (p.0, p.1)), w, h);
+            let rect = if n == 3 {
+                TriangleSetup::new([points[0], points[1], points[2]], FillRule::TopLeft, w, h)
+                    .map(|t| t.rect)
+            } else {
+                let mut s = PolygonSetup::<16>::new();
+                s.set(&points, FillRule::TopLeft, w, h).then(|| s.rect())
+            };
+            if let Some(r) = rect {
+                set_up += 1;
+                assert_eq!(rows, Some((r.y0, r.y1)), "case {case}: {points:?}");
+            }
+        }
+        assert!(set_up > 1000, "{set_up}");
     }
 
     #[test]
