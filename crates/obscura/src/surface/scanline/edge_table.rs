@@ -385,10 +385,13 @@ impl EdgeTable {
         std::mem::take(&mut self.later[row as usize])
     }
 
-    /// Returns an emptied bucket for reuse.
+    /// Returns a bucket taken with [`Self::take_later`], its memory kept for later rows'
+    /// buckets.
     pub fn give_back(&mut self, mut bucket: Vec<TableEdge>) {
-        bucket.clear();
-        self.spare.push(bucket);
+        if bucket.capacity() > 0 {
+            bucket.clear();
+            self.spare.push(bucket);
+        }
     }
 }
 
