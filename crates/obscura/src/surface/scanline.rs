@@ -48,7 +48,8 @@
 //!   not retried while the set lasts).
 //!
 //! Input: a [`PreparedView`]; output: the same [`Frame`] as the z-buffer (face ids;
-//! depth from the same `f32` depth keys). Stats: `edges`, `max_active_edges`,
+//! depth from the same `f32` depth keys). Stats: `edges` (placed in the table: the
+//! edges of the faces set up that meet a sample line), `max_active_edges`,
 //! `max_active_faces`, `spans`, `spans_without_comparison`, `spans_decided_at_ends`,
 //! `spans_by_kept_nearest`, `faces_hidden_on_entering`, `spans_by_coherence`,
 //! `spans_per_pixel`, `depth_comparisons`, `comparisons_skipped_by_coherence`,
