@@ -186,9 +186,7 @@ impl ViewArgs {
             cam.projection = Projection::Orthographic { height: h };
         }
         if moved || self.ortho.is_some() {
-            let (near, far) = fit_depth_range(scene, &cam);
-            cam.near = near;
-            cam.far = far;
+            cam.fit_depth_range(&scene.bounds());
         }
         if let Some(n) = self.near {
             cam.near = n;
@@ -237,23 +235,5 @@ fn default_size(scene: &Scene) -> Option<(u64, u64)> {
     match scene.camera() {
         Some(c) if *c == obscura::scene::demo::seed_task_camera() => Some((32, 32)),
         _ => None,
-    }
-}
-
-/// Near and far distances that hold the scene's box as seen along the camera's axis.
-fn fit_depth_range(scene: &Scene, cam: &Camera) -> (f64, f64) {
-    let (_, _, forward) = cam.basis();
-    let b = scene.bounds();
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for c in b.corners() {
-        let d = (c - cam.eye).dot(forward);
-        lo = lo.min(d);
-        hi = hi.max(d);
-    }
-    let size = b.extent().length().max(1e-9);
-    let far = hi.max(size * 1e-3) * 1.01 + size * 1e-6;
-    match cam.projection {
-        Projection::Perspective { .. } => ((lo * 0.99).max(far * 1e-4), far),
-        Projection::Orthographic { .. } => (lo - size * 0.01, far),
     }
 }

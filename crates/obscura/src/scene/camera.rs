@@ -251,6 +251,48 @@ impl Camera {
         let far = distance + radius * 1.01;
         Camera::perspective(eye, center, up, fov_y_degrees, near, far)
     }
+
+    /// Sets `near` and `far` to hold the whole box as seen along the view direction,
+    /// with a margin: `far` 1 % past the farthest corner; `near` 1 % before the
+    /// nearest corner, but for a perspective camera at least `far / 10^4` (an eye
+    /// inside the box, or closer than that, keeps 10^4 : 1, which the `f32` depth keys
+    /// resolve); for an orthographic one it may be negative (planes behind the eye are
+    /// seen). Nothing changes when the box is empty or the camera has no view
+    /// direction (eye on the target, or not finite): [`Camera::validate`] reports that.
+    ///
+    /// Used when a camera is moved without giving its planes (the CLI's `--eye`, a scene
+    /// file's `[camera]` without `near`/`far`).
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use obscura::{Camera, geom::Aabb};
+    ///
+    /// let unit = Aabb { min: DVec3::ZERO, max: DVec3::ONE };
+    /// let mut cam = Camera::perspective(DVec3::new(0.5, 0.5, 5.0), DVec3::new(0.5, 0.5, 0.0), DVec3::Y, 60.0, 1.0, 2.0);
+    /// cam.fit_depth_range(&unit);
+    /// // Corners at 4 and 5 along the view axis.
+    /// assert!((cam.near - 4.0 * 0.99).abs() < 1e-12);
+    /// assert!(cam.far > 5.0 * 1.01 && cam.far < 5.0 * 1.01 + 1e-5);
+    /// ```
+    pub fn fit_depth_range(&mut self, bounds: &Aabb) {
+        let forward = (self.target - self.eye).normalize_or_zero();
+        if bounds.is_empty() || forward == DVec3::ZERO || !forward.is_finite() {
+            return;
+        }
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for c in bounds.corners() {
+            let d = (c - self.eye).dot(forward);
+            lo = lo.min(d);
+            hi = hi.max(d);
+        }
+        let size = bounds.extent().length().max(1e-9);
+        let far = hi.max(size * 1e-3) * 1.01 + size * 1e-6;
+        self.near = match self.projection {
+            Projection::Perspective { .. } => (lo * 0.99).max(far * 1e-4),
+            Projection::Orthographic { .. } => lo - size * 0.01,
+        };
+        self.far = far;
+    }
 }
 
 /// The image size in pixels.
@@ -404,5 +446,47 @@ mod tests {
                 assert!(q[k].abs() <= q.w * 1.0001, "corner {p:?} outside: {q:?}");
             }
         }
+    }
+
+    #[test]
+    fn fitted_depth_range_holds_the_box_along_the_view_axis() {
+        // A 2 x 2 x 2 box centred at the origin; the eye on +x looking at it, so the
+        // corners lie at distances 3 and 5 along the view axis.
+        let b = Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        };
+        let size = 12f64.sqrt();
+        let eye = DVec3::new(4.0, 0.0, 0.0);
+        let mut c = Camera::perspective(eye, DVec3::ZERO, DVec3::Z, 60.0, 1.0, 2.0);
+        c.fit_depth_range(&b);
+        assert_eq!(c.near, 3.0 * 0.99);
+        assert_eq!(c.far, 5.0 * 1.01 + size * 1e-6);
+        assert!(c.validate().is_ok());
+        // The eye inside the box: the near plane keeps 10^4 : 1.
+        let mut inside = Camera::perspective(DVec3::ZERO, DVec3::X, DVec3::Z, 60.0, 1.0, 2.0);
+        inside.fit_depth_range(&b);
+        let far = 1.0 * 1.01 + size * 1e-6;
+        assert_eq!(inside.far, far);
+        assert_eq!(inside.near, far * 1e-4);
+        // Orthographic: the near plane may be behind the eye.
+        let mut ortho = Camera {
+            projection: Projection::Orthographic { height: 2.0 },
+            ..inside
+        };
+        ortho.fit_depth_range(&b);
+        assert_eq!(ortho.near, -1.0 - size * 0.01);
+        assert_eq!(ortho.far, far);
+        assert!(ortho.validate().is_ok());
+        // Nothing to fit: an empty box, or no view direction.
+        let mut same = Camera { target: eye, ..c };
+        same.fit_depth_range(&b);
+        assert_eq!((same.near, same.far), (c.near, c.far));
+        let mut empty = c;
+        empty.fit_depth_range(&Aabb {
+            min: DVec3::splat(f64::INFINITY),
+            max: DVec3::splat(f64::NEG_INFINITY),
+        });
+        assert_eq!(empty, c);
     }
 }

@@ -572,11 +572,7 @@ impl SceneReader<'_> {
             near: 1.0,
             far: 2.0,
         };
-        if eye.is_finite() && target.is_finite() && eye != target {
-            let (near, far) = fit_depth_range(scene, &camera);
-            camera.near = near;
-            camera.far = far;
-        }
+        camera.fit_depth_range(&scene.bounds());
         if let Some(n) = c.near {
             camera.near = n;
         }
@@ -587,24 +583,6 @@ impl SceneReader<'_> {
             .validate()
             .map_err(|e| self.error(span, format!("[camera]: {e}")))?;
         Ok(camera)
-    }
-}
-
-/// Near and far distances holding the scene's box along the camera's axis.
-fn fit_depth_range(scene: &Scene, cam: &Camera) -> (f64, f64) {
-    let forward = (cam.target - cam.eye).normalize();
-    let b = scene.bounds();
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for c in b.corners() {
-        let d = (c - cam.eye).dot(forward);
-        lo = lo.min(d);
-        hi = hi.max(d);
-    }
-    let size = b.extent().length().max(1e-9);
-    let far = hi.max(size * 1e-3) * 1.01 + size * 1e-6;
-    match cam.projection {
-        Projection::Perspective { .. } => ((lo * 0.99).max(far * 1e-4), far),
-        Projection::Orthographic { .. } => (lo - size * 0.01, far),
     }
 }
 
