@@ -1682,3 +1682,103 @@ fn toml_mesh_files_with_several_objects_and_all_formats() {
     // The glTF up axis is adopted when the scene file sets none.
     assert_eq!(s.up(), DVec3::Y);
 }
+
+#[test]
+fn gltf_references_to_missing_accessors_and_bad_buffer_uris_are_errors() {
+    let dir = TempDir::new("gltf-refs");
+    // A primitive naming an accessor the document lacks (the glTF crate's own validation
+    // indexed it and panicked).
+    let p = dir.write(
+        "no-accessors.gltf",
+        r#"{"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}]}"#,
+    );
+    assert_element(
+        &load_err(&p),
+        &p,
+        "mesh 0 primitive 0",
+        "refers to accessor 0, and the document has 0",
+    );
+    // A buffer URI whose percent-encoding decodes to bytes that are not UTF-8 (the
+    // crate unwrapped the decoding and panicked).
+    let p = dir.write(
+        "bad-uri.gltf",
+        r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 1, "uri": "%FF"}]}"#,
+    );
+    assert_element(
+        &load_err(&p),
+        &p,
+        "buffer 0",
+        "not valid percent-encoded UTF-8",
+    );
+    // A buffer URI naming a directory (or a device, a pipe): refused, not read.
+    std::fs::create_dir_all(dir.0.join("folder.bin")).unwrap();
+    let p = dir.write(
+        "folder.gltf",
+        r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 4, "uri": "folder%2Ebin"}]}"#,
+    );
+    match load_err(&p) {
+        Error::Io { path, source } => {
+            assert!(path.ends_with("folder.bin"), "{path:?}");
+            assert!(
+                source.to_string().contains("not a regular file"),
+                "{source}"
+            );
+        }
+        e => panic!("expected an Io error naming the buffer, got {e:?}"),
+    }
+    // A percent-encoded name of a real file is decoded.
+    let mut g = GltfBuffer::default();
+    let (p0, i0) = (g.positions(&SQUARE), g.indices(&[0, 1, 2]));
+    let rest = format!(
+        r#""meshes": [{{"primitives": [{{"attributes": {{"POSITION": {p0}}}, "indices": {i0}}}]}}], "nodes": [{{"mesh": 0}}], "scenes": [{{"nodes": [0]}}], "scene": 0"#
+    );
+    dir.write("sq uare.bin", &g.bin);
+    let p = dir.write(
+        "spaced.gltf",
+        g.json(
+            &rest,
+            &format!(
+                r#"{{"byteLength": {}, "uri": "sq%20uare.bin"}}"#,
+                g.bin.len()
+            ),
+        ),
+    );
+    assert_eq!(load(&p).face_count(), 1);
+}
+
+#[test]
+fn gltf_node_matrices_that_are_not_affine_are_errors() {
+    let dir = TempDir::new("gltf-affine");
+    let mut g = GltfBuffer::default();
+    let (p0, i0) = (g.positions(&SQUARE), g.indices(&[0, 1, 2]));
+    for (name, last_row) in [("w7", "0, 0, 0, 7"), ("flat", "0, 0, 1, 0")] {
+        let rest = format!(
+            r#""meshes": [{{"primitives": [{{"attributes": {{"POSITION": {p0}}}, "indices": {i0}}}]}}], "nodes": [{{"mesh": 0, "matrix": [1, 0, 0, {}, 0, 1, 0, {}, 0, 0, 1, {}, 0, 0, 0, {}]}}], "scenes": [{{"nodes": [0]}}], "scene": 0"#,
+            // Column-major: the last row is the fourth entry of each column.
+            &last_row[0..1],
+            &last_row[3..4],
+            &last_row[6..7],
+            &last_row[9..10]
+        );
+        let p = dir.write(&format!("{name}.gltf"), g.gltf_embedded(&rest));
+        assert_element(&load_err(&p), &p, "node 0", "not affine");
+    }
+}
+
+#[test]
+fn side_files_that_are_not_regular_files_are_not_read() {
+    let dir = TempDir::new("not-regular");
+    std::fs::create_dir_all(dir.0.join("colours.mtl")).unwrap();
+    let p = dir.write(
+        "tri.obj",
+        "mtllib colours.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    let s = load(&p);
+    let messages = s.report().messages.join("\n");
+    assert!(messages.contains("not a regular file"), "{messages}");
+    // The scene file itself.
+    match load_err(&dir.0) {
+        Error::Io { .. } | Error::UnsupportedFormat { .. } => {}
+        e => panic!("expected an error naming the folder, got {e:?}"),
+    }
+}

@@ -51,16 +51,20 @@ pub const MAX_VIEWLESS_COUNT: usize = 1 << 24;
 /// Loads a glTF or GLB file from its bytes (`path` names it and locates its buffers).
 pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     check_glb_header(path, bytes)?;
-    let gltf = gl::Gltf::from_slice(bytes).map_err(|e| {
-        let element = if bytes.starts_with(b"glTF") {
-            "GLB container"
-        } else {
-            "document"
-        };
-        Error::format(path, element, e.to_string())
-    })?;
-    let doc = &gltf.document;
-    let buffers = load_buffers(path, doc, gltf.blob.clone())?;
+    let element = if bytes.starts_with(b"glTF") {
+        "GLB container"
+    } else {
+        "document"
+    };
+    let invalid = |e: gl::Error| Error::format(path, element, e.to_string());
+    // Parsed first without the crate's validation, whose checks index the accessors a
+    // primitive names before checking that they exist: those indices are checked here,
+    // then the document is validated.
+    let gltf = gl::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
+    check_accessor_indices(path, gltf.document.as_json())?;
+    let document = gl::Document::from_json(gltf.document.into_json()).map_err(invalid)?;
+    let doc = &document;
+    let buffers = load_buffers(path, doc, gltf.blob)?;
     let mut loaded = Loaded {
         up: Some(DVec3::Y),
         ..Loaded::default()
@@ -140,6 +144,7 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
             if shared.face_count() == 0 {
                 continue; // only points or lines
             }
+            // Affine (checked per node), so this is the 3x3 part's determinant.
             let det = world.determinant();
             if det == 0.0 || !det.is_finite() {
                 loaded.report.messages.push(format!(
@@ -167,7 +172,14 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
 fn local_transform(node: &gl::Node<'_>) -> std::result::Result<DMat4, String> {
     let m = match node.transform() {
         gl::scene::Transform::Matrix { matrix } => {
-            DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)))
+            let m = DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)));
+            if m.row(3) != glam::DVec4::W {
+                return Err(format!(
+                    "matrix is not affine (last row {:?}, not [0, 0, 0, 1])",
+                    m.row(3).to_array()
+                ));
+            }
+            m
         }
         gl::scene::Transform::Decomposed {
             translation,
@@ -230,6 +242,91 @@ fn check_glb_header(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// An error naming the first primitive that refers to an accessor the document does
+/// not have.
+fn check_accessor_indices(path: &Path, root: &gl::json::Root) -> Result<()> {
+    let n = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let used = primitive
+                .attributes
+                .values()
+                .chain(&primitive.indices)
+                .chain(primitive.targets.iter().flatten().flat_map(|t| {
+                    [&t.positions, &t.normals, &t.tangents]
+                        .into_iter()
+                        .flatten()
+                }));
+            if let Some(bad) = used.map(|a| a.value()).find(|&a| a >= n) {
+                return Err(Error::format(
+                    path,
+                    format!("mesh {m} primitive {p}"),
+                    format!("refers to accessor {bad}, and the document has {n}"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reads a buffer held in a file (a URI that is not a `data:` one), relative to the
+/// glTF's folder unless `file:`: its percent-encoding decoded, only a regular file, at
+/// most the buffer's declared length read.
+fn read_buffer_file(
+    path: &Path,
+    element: &str,
+    base: &Path,
+    uri: &str,
+    length: usize,
+) -> Result<Vec<u8>> {
+    let (rest, relative) = match uri
+        .strip_prefix("file://")
+        .or_else(|| uri.strip_prefix("file:"))
+    {
+        Some(rest) => (rest, false),
+        None => (uri, true),
+    };
+    let name = percent_decode(rest).ok_or_else(|| {
+        Error::format(
+            path,
+            element,
+            format!("URI \"{uri}\" is not valid percent-encoded UTF-8"),
+        )
+    })?;
+    let file = if relative {
+        base.join(&name)
+    } else {
+        std::path::PathBuf::from(&name)
+    };
+    let io = |e| Error::io(&file, e);
+    super::check_regular_file(&file).map_err(io)?;
+    let mut data = Vec::new();
+    std::io::Read::read_to_end(
+        &mut std::io::Read::take(std::fs::File::open(&file).map_err(io)?, length as u64),
+        &mut data,
+    )
+    .map_err(io)?;
+    Ok(data)
+}
+
+/// Decodes `%XX` escapes; `None` when an escape is malformed or the result is not UTF-8.
+fn percent_decode(s: &str) -> Option<String> {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut k = 0;
+    while k < b.len() {
+        if b[k] == b'%' {
+            let hex = std::str::from_utf8(b.get(k + 1..k + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            k += 3;
+        } else {
+            out.push(b[k]);
+            k += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
 /// Reads every buffer (GLB binary chunk, `data:` URI, or file next to the glTF).
 fn load_buffers(
     path: &Path,
@@ -240,11 +337,13 @@ fn load_buffers(
     let mut out = Vec::new();
     for buffer in doc.buffers() {
         let element = format!("buffer {}", buffer.index());
-        let data = gl::buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob)
-            .map_err(|e| match (e, buffer.source()) {
-            (gl::Error::Io(io), gl::buffer::Source::Uri(uri)) => Error::io(base.join(uri), io),
-            (e, _) => Error::format(path, element.clone(), e.to_string()),
-        })?;
+        let data = match buffer.source() {
+            gl::buffer::Source::Uri(uri) if !uri.starts_with("data:") => gl::buffer::Data(
+                read_buffer_file(path, &element, base, uri, buffer.length())?,
+            ),
+            source => gl::buffer::Data::from_source_and_blob(source, Some(base), &mut blob)
+                .map_err(|e| Error::format(path, element.clone(), e.to_string()))?,
+        };
         if data.0.len() < buffer.length() {
             return Err(Error::format(
                 path,

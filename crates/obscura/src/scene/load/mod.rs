@@ -107,9 +107,25 @@ pub fn scene_from(loaded: Loaded, what: &str) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Reads a whole file, naming it in the error.
+/// Reads a whole file, naming it in the error. Only regular files: a device
+/// (`/dev/zero`), a pipe or a directory named by a scene, an `mtllib` line or a glTF
+/// buffer would be read without end, or block.
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| Error::io(path, e))
+    let io = |e| Error::io(path, e);
+    check_regular_file(path).map_err(io)?;
+    std::fs::read(path).map_err(io)
+}
+
+/// An error unless `path` is a regular file (after following links).
+pub(crate) fn check_regular_file(path: &Path) -> std::io::Result<()> {
+    if std::fs::metadata(path)?.is_file() {
+        Ok(())
+    } else {
+        Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file (a directory, device or pipe)",
+        ))
+    }
 }
 
 /// The file name without extension, for naming objects that have no name.
