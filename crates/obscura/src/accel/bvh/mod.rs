@@ -127,6 +127,17 @@ impl Default for BvhNode {
 }
 
 impl BvhNode {
+    /// The slots that hold a node or a leaf, one bit each. Traversals enter only
+    /// these: an empty slot's box (`+inf` corners) is rejected by the slab test only
+    /// while the ray's numbers are finite in `f32`.
+    #[inline(always)]
+    #[must_use]
+    pub fn occupied(&self) -> u32 {
+        (0..WIDTH).fold(0, |c, k| {
+            c | u32::from(self.child[k] != EMPTY_CHILD || self.count[k] != 0) << k
+        })
+    }
+
     /// What slot `k` holds.
     #[must_use]
     pub fn slot(&self, k: usize) -> Slot {

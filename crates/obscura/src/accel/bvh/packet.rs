@@ -567,10 +567,10 @@ impl Bvh {
             // The children some ray may enter: by the interval test of the whole
             // packet when it has one, else those that exist.
             let candidates = match &packet.frustum {
-                Some(f) => lanes.children(f, n, t_lo, lanes.far_limit(&hits.t_hi, mask)),
-                None => (0..WIDTH).fold(0, |c, k| {
-                    c | u32::from(n.child[k] != super::EMPTY_CHILD || n.count[k] != 0) << k
-                }),
+                Some(f) => {
+                    lanes.children(f, n, t_lo, lanes.far_limit(&hits.t_hi, mask)) & n.occupied()
+                }
+                None => n.occupied(),
             };
             // The children entered by some ray, nearest first (insertion sort).
             let mut entered = [Entry::default(); WIDTH];

@@ -292,8 +292,9 @@ impl Bvh {
             // The children entered, nearest first (insertion sort of at most eight).
             let mut hits = [(0.0f32, 0usize); WIDTH];
             let mut m = 0;
+            let occupied = n.occupied();
             for (k, &tk) in t.iter().enumerate() {
-                if tk != f32::INFINITY {
+                if tk != f32::INFINITY && occupied >> k & 1 != 0 {
                     let mut p = m;
                     while p > 0 && hits[p - 1].0 > tk {
                         hits[p] = hits[p - 1];
@@ -526,5 +527,71 @@ mod tests {
             ordered.triangles < recursive.triangles,
             "{ordered:?} {recursive:?}"
         );
+    }
+
+    /// Rays whose numbers overflow `f32` (an eye far beyond the scene's range, which
+    /// `Camera::validate` refuses but the traversals must survive): no slot that holds
+    /// nothing is entered. Before the traversals checked occupied slots, an empty slot's
+    /// sentinel child was taken for a leaf and indexed out of bounds.
+    #[test]
+    fn rays_beyond_single_precision_enter_no_empty_slot() {
+        use crate::accel::bvh::packet::{PacketContext, PacketStack, RayPacket};
+        let scene = demo::default_scene();
+        let tris = SceneTriangles::new(&scene);
+        let bvh = Bvh::build(&tris, &BvhOptions::default());
+        let vp = Viewport::new(8, 8).unwrap();
+        let base = scene.default_camera(vp.aspect());
+        let mut traced = 0;
+        for far_eye in [1e39, 1e60, 1e300] {
+            let dir = (base.eye - base.target).normalize();
+            let cam = crate::scene::Camera {
+                eye: base.target + dir * far_eye,
+                near: 1.0,
+                far: far_eye * 2.0,
+                ..base
+            };
+            let rays = PrimaryRays::new(&cam, vp);
+            let ignored = tris.ignored_polygons(&scene, &cam, BackfaceMode::Off);
+            let ctx = PacketContext {
+                ignored: &ignored,
+                faces: tris.polygon_faces(),
+                t_min: rays.near,
+                tie: rays.tie_rule(),
+            };
+            let (mut stack, mut packets) = (TraversalStack::default(), PacketStack::default());
+            for j in (0..vp.height).step_by(4) {
+                for i in (0..vp.width).step_by(4) {
+                    let list: Vec<(DVec3, DVec3)> = (0..16)
+                        .map(|k| rays.ray(f64::from(i + k % 4) + 0.5, f64::from(j + k / 4) + 0.5))
+                        .collect();
+                    for &(o, d) in &list {
+                        let Some(ray) = crate::accel::triangles::WatertightRay::new(o, d) else {
+                            continue;
+                        };
+                        let hit = bvh.closest_hit(
+                            &ctx.with_ray(ray),
+                            rays.far,
+                            &mut stack,
+                            &mut TraceCounters::default(),
+                        );
+                        assert!(!hit.is_hit() || hit.t.is_finite());
+                        traced += 1;
+                    }
+                    let packet = RayPacket::new(&list, bvh.scale());
+                    for kernel in [Kernel::Portable, Kernel::Auto] {
+                        let hits = bvh.closest_hits_with(
+                            kernel,
+                            &packet,
+                            &ctx,
+                            rays.far,
+                            &mut packets,
+                            &mut TraceCounters::default(),
+                        );
+                        assert!(hits.iter().all(|h| !h.is_hit() || h.t.is_finite()));
+                    }
+                }
+            }
+        }
+        assert!(traced > 0);
     }
 }
