@@ -64,6 +64,7 @@ impl Frame {
         ids: impl FnOnce(usize) -> Option<Vec<u32>>,
         depth: impl FnOnce(usize) -> Option<Vec<f32>>,
     ) -> Result<Self> {
+        viewport.validate()?;
         let n = viewport.pixel_count();
         let refuse = |reason: String| Error::InvalidViewport {
             width: u64::from(viewport.width),

@@ -486,11 +486,12 @@ pub fn prepare<'s>(
     options: &PrepareOptions,
 ) -> Result<PreparedView<'s>> {
     camera.validate()?;
+    viewport.validate()?;
     let t = ViewTransform::new(camera, viewport);
     let mut stats = PipelineStats::default();
     let threads = passes::thread_count();
 
-    let visible = visible_objects(scene, &t, options, &mut stats);
+    let mut visible = visible_objects(scene, &t, options, &mut stats);
 
     // Vertices: world -> eye -> clip, outcodes, screen positions.
     let start = Instant::now();
@@ -502,6 +503,7 @@ pub fn prepare<'s>(
     }
     bases.push(vertex_total as u32);
     let (mut vertices, codes) = passes::transform_vertices(scene, &visible, &bases, &t, threads);
+    confirm_inside(scene, &mut visible, &bases, &codes);
     stats.push(
         "vertices: world -> eye -> clip",
         "vertices",
@@ -562,6 +564,23 @@ pub fn prepare<'s>(
     })
 }
 
+/// Keeps the "wholly inside" flag of an object only if every one of its vertices has
+/// outcode 0. The flag comes from the object's box corners, transformed by the combined
+/// matrix; its vertices are transformed in two steps (eye, then clip) and round
+/// differently, so a vertex on the frustum's boundary can fall outside though the box
+/// is inside. Such an object's faces then go through the outcode tests and clipping
+/// like any other (a face with an outside vertex would else keep that vertex's NaN
+/// screen position).
+fn confirm_inside(scene: &Scene, visible: &mut [(usize, bool)], bases: &[u32], codes: &[u8]) {
+    for (slot, (k, inside)) in visible.iter_mut().enumerate() {
+        if *inside {
+            let first = bases[slot] as usize;
+            let n = scene.objects()[*k].mesh.positions().len();
+            *inside = codes[first..first + n].iter().all(|&c| c == 0);
+        }
+    }
+}
+
 /// The objects to draw, as `(index, wholly inside the frustum)`: those with faces, less
 /// those outside the frustum by their bounding sphere, then box (all of them when
 /// object culling is off). Counted in `stats`.
@@ -619,7 +638,7 @@ mod reference {
         let t = ViewTransform::new(camera, viewport);
         let mut stats = PipelineStats::default();
 
-        let visible = visible_objects(scene, &t, options, &mut stats);
+        let mut visible = visible_objects(scene, &t, options, &mut stats);
 
         // Vertices: world -> eye -> clip, outcodes, screen positions.
         let start = Instant::now();
@@ -661,6 +680,7 @@ mod reference {
             vertex_total as u64,
             start,
         );
+        super::confirm_inside(scene, &mut visible, &bases, &codes);
 
         // Back faces, then trivial rejection by outcodes.
         let start = Instant::now();

@@ -381,3 +381,170 @@ fn frustum_culling_of_objects_changes_nothing_but_the_work() {
         .0;
     assert_eq!(a.ids, b.ids);
 }
+
+/// A unit cube at the origin, the scene of the bad-input tests below.
+fn unit_cube_scene() -> Scene {
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new(
+        "cube",
+        demo::box_mesh(DVec3::splat(-1.0), DVec3::ONE),
+    ))
+    .unwrap();
+    s
+}
+
+#[test]
+fn viewports_built_by_hand_are_checked_by_prepare() {
+    let s = unit_cube_scene();
+    let cam = s.default_camera(1.0);
+    for (w, h) in [(0, 5), (5, 0), (16385, 1), (u32::MAX, u32::MAX)] {
+        let vp = Viewport {
+            width: w,
+            height: h,
+        };
+        let e = prepare(&s, &cam, vp, &PrepareOptions::default()).unwrap_err();
+        assert!(
+            matches!(e, obscura::Error::InvalidViewport { .. }),
+            "{w}x{h}: {e}"
+        );
+        assert!(Frame::new(vp).is_err(), "{w}x{h}");
+    }
+}
+
+#[test]
+fn cameras_beyond_the_single_precision_range_are_refused() {
+    let ok = Camera::perspective(
+        DVec3::new(2., 1.5, 4.),
+        DVec3::ZERO,
+        DVec3::Y,
+        60.0,
+        0.1,
+        10.0,
+    );
+    assert!(ok.validate().is_ok());
+    let refused = |c: Camera, needle: &str| {
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains(needle), "{e} should mention {needle}");
+    };
+    // Depth keys near / depth in f32: near 1e-300 gave NaN depths, 1e-44 wrong ones.
+    for near in [1e-300, 1e-44, 1e-31] {
+        refused(Camera { near, ..ok }, "too small");
+    }
+    // The smallest accepted near for far 10: far / near = 1e30.
+    assert!(Camera { near: 1e-29, ..ok }.validate().is_ok());
+    refused(
+        Camera {
+            eye: DVec3::new(2e31, 0.0, 0.0),
+            ..ok
+        },
+        "beyond the largest coordinate",
+    );
+    refused(
+        Camera {
+            near: 1.0,
+            far: 1e31,
+            ..ok
+        },
+        "beyond the largest distance",
+    );
+    refused(
+        Camera::orthographic(
+            DVec3::new(0., 0., 5.),
+            DVec3::ZERO,
+            DVec3::Y,
+            4.0,
+            -1e300,
+            1e300,
+        ),
+        "beyond the largest distance",
+    );
+    refused(
+        Camera::orthographic(
+            DVec3::new(0., 0., 5.),
+            DVec3::ZERO,
+            DVec3::Y,
+            1e39,
+            0.1,
+            100.0,
+        ),
+        "height",
+    );
+}
+
+#[test]
+fn objects_beyond_the_coordinate_range_or_not_affine_are_refused() {
+    let cube = demo::box_mesh(DVec3::splat(-1.0), DVec3::ONE);
+    let mut s = Scene::new();
+    let huge = s
+        .add(
+            ObjectDesc::new("huge", cube.clone())
+                .with_transform(DMat4::from_scale(DVec3::splat(1e31))),
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(
+        huge.contains("\"huge\"") && huge.contains("largest coordinate"),
+        "{huge}"
+    );
+    let projective = DMat4::from_cols(
+        glam::DVec4::X,
+        glam::DVec4::Y,
+        glam::DVec4::Z,
+        glam::DVec4::new(0., 0., 0., -1.),
+    );
+    let e = s
+        .add(ObjectDesc::new("projective", cube.clone()).with_transform(projective))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("\"projective\"") && e.contains("not affine"),
+        "{e}"
+    );
+    // Just inside the limits: accepted.
+    s.add(ObjectDesc::new("big", cube).with_transform(DMat4::from_scale(DVec3::splat(1e29))))
+        .unwrap();
+}
+
+#[test]
+fn an_object_inside_the_frustum_by_its_box_keeps_no_vertex_outside() {
+    // A box whose front face lies on the near plane: its box corners pass the frustum
+    // test, but its vertices, transformed in two steps, can round outside it. Every
+    // polygon of the view must then have finite screen vertices.
+    for z_front in [4.9, 4.9 - 1e-15, 4.9 + 1e-15] {
+        let mut s = Scene::new();
+        s.add(ObjectDesc::new(
+            "box",
+            demo::box_mesh(
+                DVec3::new(-0.02, -0.02, -1.0),
+                DVec3::new(0.02, 0.02, z_front),
+            ),
+        ))
+        .unwrap();
+        let cam = Camera::perspective(
+            DVec3::new(0., 0., 5.),
+            DVec3::ZERO,
+            DVec3::Y,
+            60.0,
+            0.1,
+            100.0,
+        );
+        let view = prepare(
+            &s,
+            &cam,
+            Viewport::new(16, 16).unwrap(),
+            &PrepareOptions::default(),
+        )
+        .unwrap();
+        for poly in view.polygons() {
+            for v in poly.vertices() {
+                assert!(
+                    v.x.is_finite() && v.y.is_finite() && v.zq.is_finite(),
+                    "z {z_front}: face {} has vertex {v:?}",
+                    poly.face
+                );
+            }
+        }
+        let (frame, _) = render(Algorithm::ZBuffer, &view, &RenderOptions::default()).unwrap();
+        assert!(frame.depth.iter().all(|d| !d.is_nan()));
+    }
+}

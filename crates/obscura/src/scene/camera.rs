@@ -93,7 +93,12 @@ impl Camera {
         }
     }
 
-    /// Checks that the camera can produce an image.
+    /// Checks that the camera can produce an image: finite eye, target and up, a view
+    /// direction, an up vector not along it, `near < far`, a field of view in (0, 180)
+    /// degrees and `near > 0` (perspective) or a positive height (orthographic). Every
+    /// position, distance and height must lie within [`super::MAX_COORDINATE`], and a
+    /// perspective camera's `far / near` at most that too: its depth keys `near /
+    /// depth` are stored in single precision.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::InvalidCamera(m));
         if !(self.eye.is_finite() && self.target.is_finite() && self.up.is_finite()) {
@@ -104,9 +109,23 @@ impl Camera {
                 self.up.to_array()
             ));
         }
+        let limit = super::MAX_COORDINATE;
+        if self.eye.abs().max_element() > limit || self.target.abs().max_element() > limit {
+            return bad(format!(
+                "eye {:?} or target {:?} is beyond the largest coordinate accepted, {limit:e}",
+                self.eye.to_array(),
+                self.target.to_array()
+            ));
+        }
         let dir = self.target - self.eye;
         if dir.length() <= 1e-12 * self.eye.abs().max_element().max(1.0) {
             return bad("the eye is on the target: no view direction".into());
+        }
+        if !self.up.length().is_finite() {
+            return bad(format!(
+                "the up vector {:?} is too long",
+                self.up.to_array()
+            ));
         }
         if dir.normalize().cross(self.up).length() < 1e-9 || self.up.length() == 0.0 {
             return bad("the up vector is zero or parallel to the view direction".into());
@@ -114,6 +133,12 @@ impl Camera {
         if !(self.near.is_finite() && self.far.is_finite() && self.far > self.near) {
             return bad(format!(
                 "need near < far, both finite (near {}, far {})",
+                self.near, self.far
+            ));
+        }
+        if self.near.abs() > limit || self.far.abs() > limit {
+            return bad(format!(
+                "near {} or far {} is beyond the largest distance accepted, {limit:e}",
                 self.near, self.far
             ));
         }
@@ -130,10 +155,25 @@ impl Camera {
                         self.near
                     ));
                 }
+                // Depth keys `near / depth` are stored as `f32`: the farthest one,
+                // `near / far`, must stay a normal single-precision number.
+                if self.near < self.far / limit {
+                    return bad(format!(
+                        "near {} is too small for far {}: far / near must be at most \
+                         {limit:e} (depth keys near / depth are stored in single precision)",
+                        self.near, self.far
+                    ));
+                }
             }
             Projection::Orthographic { height } => {
                 if !(height > 0.0 && height.is_finite()) {
                     return bad(format!("orthographic height {height} must be positive"));
+                }
+                if height > limit {
+                    return bad(format!(
+                        "orthographic height {height} is beyond the largest distance \
+                         accepted, {limit:e}"
+                    ));
                 }
             }
         }
@@ -330,6 +370,18 @@ impl Viewport {
             width: width as u32,
             height: height as u32,
         })
+    }
+
+    /// Checks a viewport made without [`Viewport::new`] (its fields are public): the
+    /// same error as `new` for a side of 0 or over [`Viewport::MAX_SIDE`].
+    ///
+    /// ```
+    /// use obscura::Viewport;
+    /// assert!(Viewport { width: 0, height: 5 }.validate().is_err());
+    /// assert!(Viewport { width: 640, height: 480 }.validate().is_ok());
+    /// ```
+    pub fn validate(&self) -> Result<()> {
+        Viewport::new(u64::from(self.width), u64::from(self.height)).map(|_| ())
     }
 
     /// Number of pixels.

@@ -21,6 +21,13 @@ use glam::{DMat4, DVec3};
 
 pub use adjacency::{EdgeAdjacency, MeshEdge, is_convex_closed};
 pub use camera::{Camera, Projection, Ray, Viewport};
+
+/// The largest magnitude of a world coordinate (and of a camera's position and planes)
+/// that obscura accepts. Its single-precision structures (the `f32` depth keys, the
+/// BVH's `f32` boxes) hold values up to about 3.4e38; a bound far below that keeps
+/// their arithmetic (differences, products of two coordinates) finite. Larger values
+/// are refused with an error naming the object or the camera.
+pub const MAX_COORDINATE: f64 = 1e30;
 pub use mesh::{
     DEGENERACY_TOLERANCE, FaceError, FaceOutcome, LoadReport, Material, Mesh, MeshBuilder,
     PLANARITY_TOLERANCE,
@@ -185,6 +192,13 @@ impl Scene {
         if !desc.transform.is_finite() {
             return Err(invalid("the transform has non-finite entries".into()));
         }
+        let last_row = desc.transform.row(3);
+        if last_row != glam::DVec4::W {
+            return Err(invalid(format!(
+                "the transform is not affine (last row {:?}, not [0, 0, 0, 1])",
+                last_row.to_array()
+            )));
+        }
         let det = desc.transform.determinant();
         if det == 0.0 || !det.is_finite() {
             return Err(invalid(
@@ -211,6 +225,16 @@ impl Scene {
         if let Some(p) = world.iter().find(|p| !p.is_finite()) {
             return Err(invalid(format!(
                 "a vertex overflows to {:?} when transformed",
+                p.to_array()
+            )));
+        }
+        if let Some(p) = world
+            .iter()
+            .find(|p| p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(invalid(format!(
+                "vertex {:?} (after the transform) is beyond the largest coordinate \
+                 accepted, {MAX_COORDINATE:e}",
                 p.to_array()
             )));
         }
