@@ -509,3 +509,189 @@ fn empty_and_degenerate_input_gives_background() {
         assert!(f.ids.iter().all(|&i| i == BACKGROUND));
     }
 }
+
+/// Past its split budget, depth sort leaves conflicts unresolved; it then depth-tests
+/// every polygon it paints, so the image is still the z-buffer's. Thirty mutually
+/// interpenetrating quads need more splits than the budget allows (half the pixels
+/// were wrong before the fallback).
+#[test]
+fn conflicts_left_past_the_split_budget_still_give_the_zbuffer_image() {
+    let scene = obscura::scene::random::interpenetrating_quads(30, 9, 1.0);
+    let vp = Viewport::new(256, 256).unwrap();
+    let v = prepare(
+        &scene,
+        &scene.default_camera(vp.aspect()),
+        vp,
+        &PrepareOptions::default(),
+    )
+    .unwrap();
+    for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
+        let (frame, stats) = render(algorithm, &v, &RenderOptions::default()).unwrap();
+        assert!(
+            stats.get("unresolved").unwrap() > 0.0,
+            "{algorithm:?}: {stats:?}"
+        );
+        assert_like_zbuffer(&frame, &v, 0.999, &format!("{algorithm:?}"));
+    }
+}
+
+/// Thousands of long overlapping slivers make the sort quadratic: past its comparison
+/// budget the rest is painted depth-tested (this case ran for minutes before).
+#[test]
+fn thousands_of_slivers_stop_sorting_at_the_comparison_budget() {
+    let scene = obscura::scene::random::long_thin_triangles(3000, 9, 1.0);
+    let vp = Viewport::new(256, 256).unwrap();
+    let v = prepare(
+        &scene,
+        &scene.default_camera(vp.aspect()),
+        vp,
+        &PrepareOptions::default(),
+    )
+    .unwrap();
+    for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
+        let (frame, stats) = render(algorithm, &v, &RenderOptions::default()).unwrap();
+        let budget = 1024.0 * stats.get("polygons").unwrap() + f64::from(1u32 << 24);
+        assert!(
+            stats.get("comparisons").unwrap() <= budget * 1.01,
+            "{algorithm:?}: {stats:?}"
+        );
+        assert!(
+            stats.get("unsorted").unwrap() > 0.0,
+            "{algorithm:?}: {stats:?}"
+        );
+        assert_like_zbuffer(&frame, &v, 0.999, &format!("{algorithm:?}"));
+    }
+}
+
+/// The plane-side tolerance follows the polygons' own coordinates: a vertex that no
+/// polygon uses, far away (1e9 here), once widened it enough to call crossing planes
+/// touching, and 24 pixels of this scene came out wrong without any split.
+#[test]
+fn a_far_unused_vertex_does_not_widen_the_tolerance() {
+    use obscura::scene::MeshBuilder;
+    let mesh = |far: f64, tris: &[[[f64; 3]; 3]]| {
+        let mut b = MeshBuilder::new();
+        b.push_position(DVec3::new(far, 0.0, 0.0));
+        for t in tris {
+            let base = b.vertex_count() as u32;
+            for p in t {
+                b.push_position(DVec3::from_array(*p));
+            }
+            b.push_face(&[base, base + 1, base + 2], None).unwrap();
+        }
+        b.finish().0
+    };
+    let t = glam::DMat4::from_cols_array(&[
+        0.9999727680099646,
+        -0.005958167984862085,
+        0.004354706965308926,
+        0.0,
+        0.005908561344505157,
+        0.9999185045106547,
+        0.011316944818022109,
+        0.0,
+        -0.004421780334635023,
+        -0.011290906581851721,
+        0.999926478940943,
+        0.0,
+        0.5978408310380372,
+        -1.9271348237312762,
+        -2.4404521366948857,
+        1.0,
+    ]);
+    let cam = Camera::perspective(
+        DVec3::new(
+            -0.15734606135647375,
+            std::f64::consts::FRAC_1_SQRT_2,
+            0.6893781378718103,
+        ),
+        DVec3::new(
+            0.42806842205476164,
+            0.2870598657938035,
+            0.030058842532047186,
+        ),
+        DVec3::Y,
+        66.05354569594238,
+        4.507261604723544e-9,
+        45.07261604723544,
+    );
+    for far in [0.0, 1e9, 1e12] {
+        let mut s = Scene::new();
+        s.add(ObjectDesc::new(
+            "a",
+            mesh(
+                far,
+                &[
+                    [
+                        [0.6818815980376562, 0.0, 0.6520420265959805],
+                        [
+                            -0.006031828324683408,
+                            0.2118806620657998,
+                            0.8895359197906252,
+                        ],
+                        [0.6964961464947597, 0.4763930646649579, 0.8575022587174899],
+                    ],
+                    [
+                        [0.5530589784280353, 0.9340636184735591, 0.7576291368980399],
+                        [0.1201881216451719, 0.5155135606957197, -0.827744200399533],
+                        [
+                            -0.006031828324683408,
+                            0.2118806620657998,
+                            0.8895359197906252,
+                        ],
+                    ],
+                ],
+            ),
+        ))
+        .unwrap();
+        s.add(
+            ObjectDesc::new(
+                "b",
+                mesh(
+                    far,
+                    &[
+                        [
+                            [
+                                -0.27770561296281704,
+                                -0.6044884216040463,
+                                -0.2792874077396015,
+                            ],
+                            [
+                                0.5165426620957756,
+                                0.12620966921859678,
+                                -0.48315803505238875,
+                            ],
+                            [0.018722609415762648, 0.9538753772386557, -0.966066176770539],
+                        ],
+                        [
+                            [
+                                0.5291522816546834,
+                                0.1276453372668913,
+                                -0.014696199959240097,
+                            ],
+                            [
+                                -0.27770561296281704,
+                                -0.6044884216040463,
+                                -0.2792874077396015,
+                            ],
+                            [0.018722609415762648, 0.9538753772386557, -0.966066176770539],
+                        ],
+                    ],
+                ),
+            )
+            .with_transform(t),
+        )
+        .unwrap();
+        let opts = PrepareOptions::default().with_backface(BackfaceMode::Off);
+        let v = prepare(&s, &cam, Viewport::new(33, 25).unwrap(), &opts).unwrap();
+        for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
+            let (frame, _) = render(algorithm, &v, &RenderOptions::default()).unwrap();
+            assert_like_zbuffer(
+                &frame,
+                &v,
+                1.0,
+                &format!("{algorithm:?}, unused vertex at {far}"),
+            );
+        }
+    }
+}

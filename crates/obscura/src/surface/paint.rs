@@ -13,6 +13,12 @@
 //!   Ταξινόμησης Κατά Βάθος (5)": "drawing stops when every pixel of the image has been
 //!   covered at least once").
 //!
+//! - [`PaintMode::DepthTest`]: a pixel is written only if the polygon's depth key there
+//!   is nearer than the key painted (on an exact tie, if its face id is lower): the
+//!   z-buffer's test. Depth sort switches to it when it leaves a conflict unresolved
+//!   (see its module doc), so that the polygons painted from then on, in whatever
+//!   order, still give the z-buffer's image.
+//!
 //! Coverage is [`PolygonCoverage`] (the shared top-left rule), so the painted pixels are
 //! exactly those the z-buffer would consider for the same polygon. The depth written
 //! is the eye-space depth of the polygon's depth-key plane at the pixel centre,
@@ -32,6 +38,8 @@ pub(crate) enum PaintMode {
     Overwrite,
     /// Only unpainted pixels are written (front to back).
     WriteOnce,
+    /// Only pixels where the polygon is nearer than what is painted are written.
+    DepthTest,
 }
 
 /// A frame being painted polygon by polygon.
@@ -52,6 +60,9 @@ pub(crate) struct Painter {
     pub pixels_written: u64,
     screen: Vec<(f64, f64)>,
     keyed: Vec<(f64, f64, f64)>,
+    /// The `f32` depth key of each painted pixel (0 where nothing is), kept unless the
+    /// painter is write-once: [`PaintMode::DepthTest`] compares with it.
+    keys: Vec<f32>,
 }
 
 /// Side of the coverage blocks of write-once painting, in pixels.
@@ -71,7 +82,13 @@ impl Painter {
                 block_uncovered.push((w * h) as u16);
             }
         }
+        let keys = if mode == PaintMode::WriteOnce {
+            Vec::new()
+        } else {
+            vec![0.0; vp.pixel_count()]
+        };
         Ok(Painter {
+            keys,
             frame,
             transform: *view.transform(),
             fill,
@@ -85,6 +102,14 @@ impl Painter {
             screen: Vec::new(),
             keyed: Vec::new(),
         })
+    }
+
+    /// Switches between overwriting and depth-tested painting (a write-once painter
+    /// keeps its mode: it tracks no keys).
+    pub fn set_mode(&mut self, mode: PaintMode) {
+        if self.mode != PaintMode::WriteOnce && mode != PaintMode::WriteOnce {
+            self.mode = mode;
+        }
     }
 
     /// Whether every pixel has been painted (only tracked in write-once mode).
@@ -157,8 +182,21 @@ impl Painter {
                     z += plane.dzdx;
                 }
                 self.uncovered -= u64::from(row_written);
+            } else if self.mode == PaintMode::DepthTest {
+                for k in row + x0 as usize..row + x1 as usize {
+                    let zf = z as f32;
+                    let old = self.keys[k];
+                    if zf > old || (zf == old && face < self.frame.ids[k]) {
+                        self.keys[k] = zf;
+                        self.frame.ids[k] = face;
+                        self.frame.depth[k] = self.transform.depth_of_key(zf);
+                        row_written += 1;
+                    }
+                    z += plane.dzdx;
+                }
             } else {
                 for k in row + x0 as usize..row + x1 as usize {
+                    self.keys[k] = z as f32;
                     self.frame.ids[k] = face;
                     self.frame.depth[k] = self.transform.depth_of_key(z as f32);
                     z += plane.dzdx;

@@ -39,6 +39,8 @@ struct Graph<'w> {
     grid: TileGrid,
     ready: Vec<u32>,
     split_budget: u64,
+    /// See [`super::comparison_budget`].
+    comparison_budget: u64,
     candidates: Vec<u32>,
     /// Alive, unpainted faces.
     live: usize,
@@ -146,6 +148,12 @@ impl Graph<'_> {
         }
         let mut edges: Vec<(u32, u32)> = Vec::new();
         let mut self_split = false;
+        if c.comparisons > self.comparison_budget {
+            // Too much work: no more relations; what is left is painted depth-tested.
+            self.ws.fallback = true;
+            c.unsorted += 1;
+            cands.clear();
+        }
         for &j in &cands {
             let jk = j as usize;
             if j == i || !self.alive[jk] || self.painted[jk] || !self.linked[jk] {
@@ -158,6 +166,7 @@ impl Graph<'_> {
                 Relation::Intersect => {
                     if self.split_budget == 0 {
                         c.unresolved += 1;
+                        self.ws.fallback = true;
                         continue;
                     }
                     let s = self.ws.sides(i, j);
@@ -174,6 +183,7 @@ impl Graph<'_> {
                         continue;
                     }
                     c.unresolved += 1;
+                    self.ws.fallback = true;
                 }
             }
         }
@@ -267,6 +277,7 @@ pub(super) fn sort(
         grid,
         ready: Vec::new(),
         split_budget: super::split_budget(n),
+        comparison_budget: super::comparison_budget(n),
         candidates: Vec::new(),
         live: 0,
     };
@@ -343,6 +354,7 @@ pub(super) fn sort(
         // No split possible (rounding, or the budget is spent): paint a face of the
         // cycle anyway.
         counters.unresolved += 1;
+        g.ws.fallback = true;
         let i = cycle.first().copied().unwrap_or(start);
         g.covering[i as usize] = 0;
         g.ready.push(i);

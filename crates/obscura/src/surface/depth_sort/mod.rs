@@ -61,8 +61,13 @@
 //! - Complexity: O(P log P) for the sort and O(P k) for k overlapping candidates per
 //!   polygon on ordinary scenes; O(P^2) comparisons at worst (seed 000), and each
 //!   split adds a polygon. A split budget (`8 P + 1024`) guarantees termination on
-//!   degenerate input; past it, remaining conflicts are painted as found and counted
-//!   in `unresolved`.
+//!   degenerate input; past it (or when rounding prevents a split), a conflict is
+//!   painted as found and counted in `unresolved`, and from then on every polygon is
+//!   painted depth-tested against what is painted (the z-buffer's test): those
+//!   painted before lie behind all that remain, so the image is still the
+//!   z-buffer's. A comparison budget (`1024 P + 2^24`) bounds the work the same way:
+//!   past it the remaining polygons are painted (the matrix: linked without relations)
+//!   unsorted, depth-tested, counted in `unsorted`.
 //! - A polygon that had to wait at the head keeps its candidate list and resumes its
 //!   scan where it stopped (those before cannot be hidden by it), until a split.
 //! - Stats: `polygons` (of the view), `polygons_sorted` (covering a sample),
@@ -72,6 +77,7 @@
 //!   `decided_overlap_depth`; Newell's `swaps` (with `swap_test3`, `swap_test4`,
 //!   `swap_overlap_depth` saying why) and `cycles`; the matrix's `relations` (edges
 //!   of M), `decided_planes_both_orders` and `cycles_broken`; `splits`, `unresolved`,
+//!   `unsorted`,
 //!   `polygons_painted`, `pixels_written`.
 //! - Limitations: single-threaded; polygons whose box spans much of the image are
 //!   listed in many tiles and met once per tile by the scans that reach them.
@@ -91,6 +97,15 @@ use work::WorkSet;
 /// unresolved (a guard against endless splitting on degenerate input).
 fn split_budget(n: usize) -> u64 {
     8 * n as u64 + 1024
+}
+
+/// The number of comparisons allowed for `n` polygons before the remaining ones are
+/// painted without sorting, each depth-tested (a guard against the O(P^2) worst case:
+/// thousands of long thin overlapping triangles took minutes). Sponza's atrium view
+/// (204k polygons) needs 15M comparisons with Newell's tests and 44M with the matrix,
+/// a fifth of its budget.
+fn comparison_budget(n: usize) -> u64 {
+    1024 * n as u64 + (1 << 24)
 }
 
 /// How often each test decided, and what was done.
@@ -113,6 +128,8 @@ struct Counters {
     cycles: u64,
     splits: u64,
     unresolved: u64,
+    /// Polygons painted (or, for the matrix, linked) past the comparison budget.
+    unsorted: u64,
     relations: u64,
 }
 
@@ -194,6 +211,7 @@ fn run(
     }
     stats.set("splits", c.splits as f64);
     stats.set("unresolved", c.unresolved as f64);
+    stats.set("unsorted", c.unsorted as f64);
     stats
 }
 
@@ -208,6 +226,9 @@ fn render_variant(
         let Some(plane) = ws.depth_plane(i) else {
             return;
         };
+        if ws.fallback {
+            painter.set_mode(PaintMode::DepthTest);
+        }
         screen.clear();
         screen.extend(ws.vertices(i).iter().map(|v| (v.x, v.y)));
         painter.paint(&screen, plane, ws.polys[i as usize].face);

@@ -176,8 +176,20 @@ pub(super) fn sort(
     }
     let mut spare = Vec::new();
     let mut painted = 0usize;
+    let budget = super::comparison_budget(n);
     while let Some(p) = s.head() {
         let pk = p as usize;
+        if counters.comparisons > budget {
+            // Too much work (thousands of long overlapping slivers): the rest is
+            // painted in its current order, depth-tested.
+            s.ws.fallback = true;
+            counters.unsorted += 1;
+            s.resume.remove(&p);
+            s.stack.pop();
+            s.state[pk] = State::Painted;
+            paint(s.ws, p);
+            continue;
+        }
         let (prect, pdmin, pface) = {
             let pp = &s.ws.polys[pk];
             (pp.rect, pp.dmin, pp.face)
@@ -312,8 +324,10 @@ pub(super) fn sort(
                 continue;
             }
         }
-        // No order and no split (rounding, or the split budget is spent): paint P.
+        // No order and no split (rounding, or the split budget is spent): paint P,
+        // and depth-test it and every later polygon.
         counters.unresolved += 1;
+        s.ws.fallback = true;
         s.resume.remove(&p);
         s.stack.pop();
         s.state[pk] = State::Painted;

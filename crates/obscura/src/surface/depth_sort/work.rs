@@ -102,6 +102,10 @@ pub(super) struct WorkSet {
     height: u32,
     /// Number of view polygons.
     pub view_polygons: usize,
+    /// Set once a conflict is left unresolved (the split budget spent, or a split that
+    /// rounding prevents) or the comparison budget is spent: the polygons painted from
+    /// then on are depth-tested against what is painted (see `super::render_variant`).
+    pub fallback: bool,
     scratch: Vec<DVec3>,
 }
 
@@ -111,10 +115,12 @@ impl WorkSet {
     pub fn from_view(view: &PreparedView<'_>, fill: FillRule) -> WorkSet {
         let vp = view.viewport();
         let t = *view.transform();
-        let scale = view
-            .vertices()
-            .iter()
-            .fold(0.0f64, |m, v| m.max(v.eye.abs().max_element()));
+        // The scale of the polygons' own vertices (a vertex no polygon uses, or one of
+        // an object culled whole, must not widen the tolerance).
+        let (_, indices, _) = view.polygon_arrays();
+        let scale = indices.iter().fold(0.0f64, |m, &i| {
+            m.max(view.vertices()[i as usize].eye.abs().max_element())
+        });
         let base_eps = RELATIVE_EPS * scale.max(f64::MIN_POSITIVE);
         let mut ws = WorkSet {
             polys: Vec::with_capacity(view.polygon_count()),
@@ -125,6 +131,7 @@ impl WorkSet {
             width: vp.width,
             height: vp.height,
             view_polygons: view.polygon_count(),
+            fallback: false,
             scratch: Vec::new(),
         };
         let mut screen = Vec::new();
