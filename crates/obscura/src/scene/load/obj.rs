@@ -134,21 +134,21 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed> {
         line_no += 1;
         let first_line = line_no;
         let mut line: Cow<'_, [u8]> = Cow::Borrowed(raw);
-        // A trailing backslash joins the next line (rare: only then do we allocate).
+        // A trailing backslash joins the next line (rare: only then do we allocate),
+        // in place: linear in the joined length however many lines are joined.
         loop {
             let end = line.iter().rposition(|&b| !is_blank(b));
             if end.is_none_or(|e| line[e] != b'\\') {
                 break;
             }
-            let mut joined = line[..end.unwrap_or(0)].to_vec();
+            let joined = line.to_mut();
+            joined.truncate(end.unwrap_or(0));
             joined.push(b' ');
             let Some(next) = lines.next() else {
-                line = Cow::Owned(joined);
                 break;
             };
             line_no += 1;
             joined.extend_from_slice(next);
-            line = Cow::Owned(joined);
         }
         let mut tokens = Tokens { s: &line, i: 0 };
         let Some(keyword) = tokens.next() else {
