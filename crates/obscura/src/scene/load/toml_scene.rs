@@ -38,7 +38,8 @@ use super::{Loaded, extension, line_of_offset, load_objects, palette_color, read
 use crate::scene::{Camera, Mesh, ObjectDesc, Projection, Scene, demo};
 use crate::{Error, Result};
 
-/// Most faces one primitive may generate (a typo in `segments` should not exhaust memory).
+/// Most faces the primitives of one scene file may generate together (a typo in
+/// `segments` should not exhaust memory, nor should a dozen primitives at the limit).
 pub const MAX_PRIMITIVE_FACES: u64 = 20_000_000;
 
 #[derive(Deserialize)]
@@ -127,6 +128,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         text: &text,
         dir: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         cache: HashMap::new(),
+        primitive_faces: std::cell::Cell::new(0),
     }
     .read(file)
 }
@@ -142,6 +144,8 @@ struct SceneReader<'a> {
     text: &'a str,
     dir: PathBuf,
     cache: HashMap<PathBuf, Arc<CachedFile>>,
+    /// Faces of the primitives generated so far (see [`MAX_PRIMITIVE_FACES`]).
+    primitive_faces: std::cell::Cell<u64>,
 }
 
 impl SceneReader<'_> {
@@ -396,12 +400,23 @@ impl SceneReader<'_> {
             }
         };
         let too_many = |faces: u64| -> Result<()> {
+            let before = self.primitive_faces.get();
             if faces > MAX_PRIMITIVE_FACES {
                 Err(self.error(
                     &kind.span(),
                     format!("this {name} would have {faces} faces (at most {MAX_PRIMITIVE_FACES})"),
                 ))
+            } else if before + faces > MAX_PRIMITIVE_FACES {
+                Err(self.error(
+                    &kind.span(),
+                    format!(
+                        "this {name} would have {faces} faces, {} with the primitives before \
+                         it (at most {MAX_PRIMITIVE_FACES} in a scene file)",
+                        before + faces
+                    ),
+                ))
             } else {
+                self.primitive_faces.set(before + faces);
                 Ok(())
             }
         };
