@@ -548,3 +548,26 @@ fn an_object_inside_the_frustum_by_its_box_keeps_no_vertex_outside() {
         assert!(frame.depth.iter().all(|d| !d.is_nan()));
     }
 }
+
+#[test]
+fn a_small_object_far_from_the_origin_is_framed_and_drawn() {
+    // A unit triangle at y = 1e13: the default camera is a few units from it, which the
+    // eye-on-target test once took for no direction (its threshold grew with |eye|).
+    let mut s = Scene::new();
+    s.add(triangle_at(DVec3::new(0.0, 1e13, 0.0))).unwrap();
+    let vp = Viewport::new(64, 64).unwrap();
+    let cam = s.default_camera(vp.aspect());
+    assert!(cam.validate().is_ok(), "{cam:?}");
+    let view = prepare(&s, &cam, vp, &PrepareOptions::default()).unwrap();
+    let (frame, _) = render(Algorithm::ZBuffer, &view, &RenderOptions::default()).unwrap();
+    assert!(frame.covered_pixels() > 100, "{}", frame.covered_pixels());
+}
+
+fn triangle_at(at: DVec3) -> ObjectDesc {
+    let mut b = obscura::scene::MeshBuilder::new();
+    for p in [at, at + DVec3::X, at + DVec3::Z] {
+        b.push_position(p);
+    }
+    b.push_face(&[0, 1, 2], None).unwrap();
+    ObjectDesc::new("far", b.finish().0)
+}
