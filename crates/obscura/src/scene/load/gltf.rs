@@ -65,6 +65,7 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     let document = gl::Document::from_json(gltf.document.into_json()).map_err(invalid)?;
     let doc = &document;
     let buffers = load_buffers(path, doc, gltf.blob)?;
+    let mut budget = decode_budget(&buffers);
     let mut loaded = Loaded {
         up: Some(DVec3::Y),
         ..Loaded::default()
@@ -136,7 +137,7 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
             let Some(mesh) = node.mesh() else { continue };
             let m = mesh.index();
             if meshes[m].is_none() {
-                let (built, color) = build_mesh(path, &mesh, &buffers, &mut loaded)?;
+                let (built, color) = build_mesh(path, &mesh, &buffers, &mut budget, &mut loaded)?;
                 meshes[m] = Some(Arc::new(built));
                 colors[m] = color;
             }
@@ -360,11 +361,23 @@ fn load_buffers(
     Ok(out)
 }
 
+/// How many values (components) a file's accessors may decode in all: four per byte
+/// of its buffers, plus one accessor of [`MAX_VIEWLESS_COUNT`] three-component elements
+/// without a buffer view. Primitives reading the same accessor decode it
+/// each time, so a small file could otherwise ask for any amount of memory.
+fn decode_budget(buffers: &[Vec<u8>]) -> usize {
+    let bytes: usize = buffers.iter().map(Vec::len).sum();
+    bytes
+        .saturating_mul(4)
+        .saturating_add(3 * MAX_VIEWLESS_COUNT)
+}
+
 /// Builds the mesh of a glTF mesh (all its triangle primitives) and its first colour.
 fn build_mesh(
     path: &Path,
     mesh: &gl::Mesh<'_>,
     buffers: &[Vec<u8>],
+    budget: &mut usize,
     loaded: &mut Loaded,
 ) -> Result<(Mesh, [f32; 3])> {
     let mesh_name = match mesh.name() {
@@ -398,8 +411,8 @@ fn build_mesh(
                 format!("type {:?}, expected VEC3", pos.dimensions()),
             ));
         }
-        let xyz =
-            read_accessor(&pos, 3, buffers).map_err(|m| Error::format(path, &pos_element, m))?;
+        let xyz = read_accessor(&pos, 3, buffers, budget)
+            .map_err(|m| Error::format(path, &pos_element, m))?;
         let base = b.vertex_count() as u32;
         let n = pos.count();
         for (i, p) in xyz.chunks_exact(3).enumerate() {
@@ -431,7 +444,7 @@ fn build_mesh(
                         ),
                     ));
                 }
-                let values = read_accessor(&acc, 1, buffers)
+                let values = read_accessor(&acc, 1, buffers, budget)
                     .map_err(|m| Error::format(path, &element, m))?;
                 (
                     values.into_iter().map(|v| v as u64).collect::<Vec<u64>>(),
@@ -509,10 +522,12 @@ fn build_mesh(
 /// Reads an accessor of `components` per element (1 or 3) as `f64`, checking every
 /// range against its buffer view and buffer, applying sparse substitution and integer
 /// normalization.
+/// `budget` is the number of values the file may still decode (see [`decode_budget`]).
 fn read_accessor(
     acc: &gl::Accessor<'_>,
     components: usize,
     buffers: &[Vec<u8>],
+    budget: &mut usize,
 ) -> std::result::Result<Vec<f64>, String> {
     let data_type = acc.data_type();
     let size = data_type.size();
@@ -523,6 +538,15 @@ fn read_accessor(
         .checked_mul(components)
         .filter(|&t| t <= 1 << 31)
         .ok_or_else(|| format!("count {count} is too large"))?;
+    let spend = |budget: &mut usize| {
+        *budget = budget.checked_sub(total).ok_or_else(|| {
+            format!(
+                "the file's accessors decode to more values than it can hold ({total} more \
+                 here; an accessor counts each time a primitive reads it)"
+            )
+        })?;
+        Ok::<(), String>(())
+    };
     let mut out = Vec::new();
     match acc.view() {
         Some(view) => {
@@ -548,6 +572,7 @@ fn read_accessor(
                     ));
                 }
             }
+            spend(budget)?;
             out.reserve(total);
             for i in 0..count {
                 let at = acc.offset() + i * stride;
@@ -564,6 +589,7 @@ fn read_accessor(
                     "{count} elements without a buffer view (at most {MAX_VIEWLESS_COUNT})"
                 ));
             }
+            spend(budget)?;
             out.resize(total, 0.0);
         }
     }
