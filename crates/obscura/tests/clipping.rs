@@ -1075,3 +1075,65 @@ proptest! {
         }
     }
 }
+
+/// Finite coordinates whose differences overflow (1e308 apart) gave NaN endpoints in
+/// Liang-Barsky, the homogeneous clippers and the split: every clipper now refuses
+/// coordinates beyond `MAX_CLIP_COORDINATE` with `None` (or an empty polygon, or an
+/// unsplit polygon), and agrees just inside that range.
+#[test]
+fn coordinates_beyond_the_clip_range_are_refused_not_turned_into_nan() {
+    let rect = Rect::new(0.0, 0.0, 1.0, 1.0).unwrap();
+    let window = ConvexWindow::rectangle(&rect);
+    let (a, b) = (DVec2::new(-1e308, 0.5), DVec2::new(1e308, 0.5));
+    assert_eq!(cs::clip_segment_2d(a, b, &rect), None);
+    assert_eq!(lb::clip_segment_2d(a, b, &rect), None);
+    assert_eq!(sh::clip_segment_2d(a, b, &window), None);
+    assert_eq!(region_codes::clip_segment(&window, a, b), None);
+    // Just inside the range: finite results (rounding at this scale is about 1e284,
+    // so no agreement to the window's size is expected).
+    let (a, b) = (DVec2::new(-1e300, 0.5), DVec2::new(1e300, 0.5));
+    for r in [
+        cs::clip_segment_2d(a, b, &rect),
+        lb::clip_segment_2d(a, b, &rect),
+        sh::clip_segment_2d(a, b, &window),
+        region_codes::clip_segment(&window, a, b),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        assert!(r.0.is_finite() && r.1.is_finite(), "{r:?}");
+    }
+    // Homogeneous, w at the largest double.
+    let (p, q) = (
+        DVec4::new(0.0, 0.0, 0.0, f64::MAX),
+        DVec4::new(0.5, 0.0, 0.0, -f64::MAX),
+    );
+    assert_eq!(cs::clip_segment_homogeneous(p, q), None);
+    assert_eq!(lb::clip_segment_homogeneous(p, q), None);
+    assert_eq!(sh::clip_segment_homogeneous(p, q), None);
+    assert!(sh::clip_polygon_homogeneous(&[p, q, DVec4::new(0., 0.5, 0., 1.)]).is_empty());
+    // A window or box beyond the range is refused.
+    assert_eq!(
+        Rect::new(-f64::MAX, -f64::MAX, f64::MAX, f64::MAX),
+        Err(WindowError::NonFinite)
+    );
+    // The split: unsplit, no NaN piece.
+    let tri = [
+        DVec3::new(-1e308, 0.0, 0.0),
+        DVec3::new(1e308, 0.0, 0.0),
+        DVec3::new(0.0, 1e308, 0.0),
+    ];
+    let plane = Plane::from_point_normal(DVec3::ZERO, DVec3::X);
+    assert!(matches!(split_polygon(&tri, &plane, 1e-9), Split::Front));
+    // A negative tolerance counts as 0: a square crossing the plane splits in two.
+    let square = [
+        DVec3::new(-1., -1., 0.),
+        DVec3::new(1., -1., 0.),
+        DVec3::new(1., 1., 0.),
+        DVec3::new(-1., 1., 0.),
+    ];
+    match split_polygon(&square, &plane, -1.0) {
+        Split::Spanning { front, back } => assert_eq!((front.len(), back.len()), (4, 4)),
+        other => panic!("{other:?}"),
+    }
+}

@@ -36,6 +36,7 @@
 //! The segment must be given in the space of the window: for perspective views use the
 //! homogeneous form before the divide by `w` (see [`super::projection_order`]).
 
+use super::InRange;
 use glam::{DVec2, DVec3, DVec4};
 
 use super::sutherland_hodgman::ClipPlane;
@@ -154,7 +155,7 @@ fn clip_2d(
     rect: &Rect,
     mut record: impl FnMut(Step2d),
 ) -> Option<(DVec2, DVec2)> {
-    if !(p1.is_finite() && p2.is_finite()) {
+    if !(p1.in_range() && p2.in_range()) {
         return None;
     }
     let (min, max) = (rect.min(), rect.max());
@@ -247,7 +248,7 @@ pub fn outcode_box(p: DVec3, bounds: &Aabb) -> u8 {
 /// Whether a box can clip: finite, and `min <= max` on every axis (a flat box is
 /// allowed, it clips to a plane).
 pub(crate) fn valid_box(bounds: &Aabb) -> bool {
-    bounds.min.is_finite() && bounds.max.is_finite() && !bounds.is_empty()
+    bounds.min.in_range() && bounds.max.in_range() && !bounds.is_empty()
 }
 
 /// Cohen-Sutherland 3D against an axis-aligned box (the orthographic or parallel view
@@ -264,7 +265,7 @@ pub(crate) fn valid_box(bounds: &Aabb) -> bool {
 /// ```
 #[must_use]
 pub fn clip_segment_box(p1: DVec3, p2: DVec3, bounds: &Aabb) -> Option<(DVec3, DVec3)> {
-    if !(p1.is_finite() && p2.is_finite() && valid_box(bounds)) {
+    if !(p1.in_range() && p2.in_range() && valid_box(bounds)) {
         return None;
     }
     let (c1, c2) = (outcode_box(p1, bounds), outcode_box(p2, bounds));
@@ -325,7 +326,7 @@ fn cs_clip_box(
 /// ```
 #[must_use]
 pub fn clip_segment_homogeneous(p1: DVec4, p2: DVec4) -> Option<(DVec4, DVec4)> {
-    if !(p1.is_finite() && p2.is_finite()) {
+    if !(p1.in_range() && p2.in_range()) {
         return None;
     }
     let (c1, c2) = (

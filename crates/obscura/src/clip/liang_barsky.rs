@@ -33,6 +33,7 @@
 //! # Complexity
 //! `O(1)`: one division per boundary the segment is not parallel to, no iteration.
 
+use super::InRange;
 use glam::{DVec2, DVec3, DVec4};
 
 use super::Rect;
@@ -85,7 +86,7 @@ pub fn rect_pq(p1: DVec2, p2: DVec2, rect: &Rect) -> [(f64, f64); 4] {
 /// The parameter interval of segment `p1 p2` inside the rectangle, or `None`.
 #[must_use]
 pub fn rect_parameters(p1: DVec2, p2: DVec2, rect: &Rect) -> Option<(f64, f64)> {
-    if !(p1.is_finite() && p2.is_finite()) {
+    if !(p1.in_range() && p2.in_range()) {
         return None;
     }
     interval(&rect_pq(p1, p2, rect))
@@ -135,7 +136,7 @@ pub fn homogeneous_pq(p1: DVec4, p2: DVec4) -> [(f64, f64); 6] {
 /// `None`.
 #[must_use]
 pub fn homogeneous_parameters(p1: DVec4, p2: DVec4) -> Option<(f64, f64)> {
-    if !(p1.is_finite() && p2.is_finite()) {
+    if !(p1.in_range() && p2.in_range()) {
         return None;
     }
     interval(&homogeneous_pq(p1, p2))
@@ -180,7 +181,7 @@ pub fn box_pq(p1: DVec3, p2: DVec3, bounds: &Aabb) -> [(f64, f64); 6] {
 /// empty or non-finite box).
 #[must_use]
 pub fn box_parameters(p1: DVec3, p2: DVec3, bounds: &Aabb) -> Option<(f64, f64)> {
-    if !(p1.is_finite() && p2.is_finite() && valid_box(bounds)) {
+    if !(p1.in_range() && p2.in_range() && valid_box(bounds)) {
         return None;
     }
     interval(&box_pq(p1, p2, bounds))

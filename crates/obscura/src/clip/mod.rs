@@ -25,8 +25,10 @@
 //! [`ConvexWindow`] (any strictly convex polygon, either winding; non-convex and
 //! degenerate ones are refused with a [`WindowError`]). Boxes are [`crate::geom::Aabb`].
 //! Every segment clipper returns the visible part with its endpoints in the input
-//! order, returns an unclipped endpoint bit for bit, and gives `None` for non-finite
-//! input; the tests in `tests/clipping.rs` check that all of them agree.
+//! order, returns an unclipped endpoint bit for bit, and gives `None` for input out of
+//! range (a coordinate that is not finite or beyond [`MAX_CLIP_COORDINATE`], where
+//! differences of two coordinates would overflow); the tests in `tests/clipping.rs`
+//! check that all of them agree. Windows and boxes beyond that range are refused too.
 
 pub mod cohen_sutherland;
 pub mod liang_barsky;
@@ -37,6 +39,39 @@ pub mod sutherland_hodgman;
 pub mod window;
 
 pub use window::{ConvexWindow, EdgeLine, Rect, WindowError, polygon_area_2d};
+
+/// The largest magnitude of a coordinate the clippers accept: differences and sums of
+/// two such coordinates stay finite.
+pub const MAX_CLIP_COORDINATE: f64 = 1e300;
+
+/// Whether every coordinate is finite and within [`MAX_CLIP_COORDINATE`].
+pub(crate) trait InRange {
+    fn in_range(&self) -> bool;
+}
+
+impl InRange for f64 {
+    fn in_range(&self) -> bool {
+        self.abs() <= MAX_CLIP_COORDINATE
+    }
+}
+
+impl InRange for glam::DVec2 {
+    fn in_range(&self) -> bool {
+        self.is_finite() && self.abs().max_element() <= MAX_CLIP_COORDINATE
+    }
+}
+
+impl InRange for glam::DVec3 {
+    fn in_range(&self) -> bool {
+        self.is_finite() && self.abs().max_element() <= MAX_CLIP_COORDINATE
+    }
+}
+
+impl InRange for glam::DVec4 {
+    fn in_range(&self) -> bool {
+        self.is_finite() && self.abs().max_element() <= MAX_CLIP_COORDINATE
+    }
+}
 
 use glam::DVec4;
 

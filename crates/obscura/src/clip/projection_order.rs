@@ -31,6 +31,7 @@
 //! # Complexity
 //! `O(1)` per segment, `O(n)` per `n`-gon (six or four stages).
 
+use super::InRange;
 use glam::{DVec2, DVec4};
 
 use super::{ConvexWindow, Rect, cohen_sutherland, sutherland_hodgman};
@@ -87,7 +88,7 @@ pub fn clip_segment_after_projection(a: DVec4, b: DVec4) -> Option<(DVec2, DVec2
 /// stages), then divide. Empty when nothing is visible.
 #[must_use]
 pub fn clip_polygon_before_projection(polygon: &[DVec4]) -> Vec<DVec2> {
-    if polygon.iter().any(|v| !v.is_finite()) {
+    if polygon.iter().any(|v| !v.in_range()) {
         return Vec::new();
     }
     let clipped = sutherland_hodgman::clip_polygon_homogeneous(polygon);

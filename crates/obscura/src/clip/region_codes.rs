@@ -45,6 +45,7 @@
 //! crossing lines (each piece's midpoint is coded against all `n` lines); no
 //! allocation unless `k > 16`.
 
+use super::InRange;
 use std::fmt;
 
 use glam::DVec2;
@@ -243,7 +244,7 @@ fn point_at(p: DVec2, q: DVec2, t: f64) -> DVec2 {
 /// ```
 #[must_use]
 pub fn clip_segment(window: &ConvexWindow, p: DVec2, q: DVec2) -> Option<(DVec2, DVec2)> {
-    if !(p.is_finite() && q.is_finite()) {
+    if !(p.in_range() && q.in_range()) {
         return None;
     }
     let n = window.edge_count();
@@ -314,7 +315,7 @@ pub fn clip_segment_traced(window: &ConvexWindow, p: DVec2, q: DVec2) -> Trace {
         pieces: Vec::new(),
         result: None,
     };
-    if !(p.is_finite() && q.is_finite()) {
+    if !(p.in_range() && q.in_range()) {
         return trace;
     }
     // Step 2.

@@ -12,6 +12,7 @@
 //! coplanar, not split. Intersections are computed from the front endpoint towards the
 //! back one, so two polygons sharing an edge get bit-identical new vertices.
 
+use super::InRange;
 use glam::DVec3;
 
 use crate::geom::{Plane, PlaneSide};
@@ -39,8 +40,10 @@ pub enum Split {
 
 /// Splits a convex polygon by a plane. See the module doc for `eps`.
 ///
-/// Degenerate input splits nothing: a plane whose normal is zero or not finite, or a
-/// "polygon" of fewer than three vertices, gives [`Split::Front`].
+/// Degenerate input splits nothing: a plane whose normal is zero or not finite, a
+/// "polygon" of fewer than three vertices, or one with a coordinate out of range
+/// (not finite or beyond [`super::MAX_CLIP_COORDINATE`]), gives [`Split::Front`]. A
+/// negative or NaN `eps` counts as 0.
 ///
 /// ```
 /// use obscura::clip::split::{split_polygon, Split};
@@ -56,9 +59,14 @@ pub enum Split {
 #[must_use]
 pub fn split_polygon(points: &[DVec3], plane: &Plane, eps: f64) -> Split {
     let len = plane.normal.length();
-    if points.len() < 3 || !(len > 0.0 && len.is_finite() && plane.d.is_finite()) {
+    if points.len() < 3
+        || !(len > 0.0 && len.is_finite() && plane.d.is_finite())
+        || points.iter().any(|p| !p.in_range())
+    {
         return Split::Front;
     }
+    // A negative or NaN tolerance would make a vertex both sides of the plane.
+    let eps = if eps > 0.0 { eps } else { 0.0 };
     let dist: Vec<f64> = points.iter().map(|&p| plane.evaluate(p) / len).collect();
     let side = |d: f64| {
         if d > eps {

@@ -40,6 +40,7 @@
 //! edges, as the algorithm is known to produce). Output vertex count is at most
 //! `n + 6` in 3D, `n + m` against an `m`-edge window.
 
+use super::InRange;
 use glam::{DVec2, DVec3, DVec4};
 
 use super::ConvexWindow;
@@ -229,7 +230,8 @@ pub fn clip_polygon_to_plane<V: ClipVertex>(input: &[V], plane: ClipPlane, out: 
 
 /// Clips a convex polygon against the whole view volume, only through the planes in
 /// `planes_mask` (outcode bits; `0x3f` for all six). The result is in `out`; it is
-/// empty when nothing is inside. `scratch` is reused between calls.
+/// empty when nothing is inside, and for a vertex out of range (see the module doc of
+/// [`crate::clip`]). `scratch` is reused between calls.
 pub fn clip_polygon_homogeneous_masked<V: ClipVertex>(
     input: &[V],
     planes_mask: u8,
@@ -237,6 +239,9 @@ pub fn clip_polygon_homogeneous_masked<V: ClipVertex>(
     scratch: &mut Vec<V>,
 ) {
     out.clear();
+    if input.iter().any(|v| !v.clip().in_range()) {
+        return;
+    }
     out.extend_from_slice(input);
     for plane in ClipPlane::ALL {
         if planes_mask & plane.outcode_bit() == 0 {
@@ -357,7 +362,7 @@ pub fn clip_polygon_2d_into(
     scratch: &mut Vec<DVec2>,
 ) {
     out.clear();
-    if polygon.iter().any(|p| !p.is_finite()) {
+    if polygon.iter().any(|p| !p.in_range()) {
         return;
     }
     out.extend_from_slice(polygon);
@@ -375,7 +380,7 @@ pub fn clip_polygon_2d_into(
 /// `a b` inside the convex window, endpoints in the same order, or `None`.
 #[must_use]
 pub fn clip_segment_2d(a: DVec2, b: DVec2, window: &ConvexWindow) -> Option<(DVec2, DVec2)> {
-    if !(a.is_finite() && b.is_finite()) {
+    if !(a.in_range() && b.in_range()) {
         return None;
     }
     let (mut a, mut b) = (a, b);
@@ -431,7 +436,7 @@ pub fn clip_polygon_box_into(
     scratch: &mut Vec<DVec3>,
 ) {
     out.clear();
-    if !valid_box(bounds) || polygon.iter().any(|p| !p.is_finite()) {
+    if !valid_box(bounds) || polygon.iter().any(|p| !p.in_range()) {
         return;
     }
     out.extend_from_slice(polygon);
@@ -449,7 +454,7 @@ pub fn clip_polygon_box_into(
 /// is inside (or for an empty or non-finite box).
 #[must_use]
 pub fn clip_segment_box(a: DVec3, b: DVec3, bounds: &Aabb) -> Option<(DVec3, DVec3)> {
-    if !(a.is_finite() && b.is_finite() && valid_box(bounds)) {
+    if !(a.in_range() && b.in_range() && valid_box(bounds)) {
         return None;
     }
     let (mut a, mut b) = (a, b);
@@ -464,7 +469,7 @@ pub fn clip_segment_box(a: DVec3, b: DVec3, bounds: &Aabb) -> Option<(DVec3, DVe
 /// `-w <= x, y, z <= w`, six stages in the order of [`ClipPlane::ALL`].
 #[must_use]
 pub fn clip_segment_homogeneous(a: DVec4, b: DVec4) -> Option<(DVec4, DVec4)> {
-    if !(a.is_finite() && b.is_finite()) {
+    if !(a.in_range() && b.in_range()) {
         return None;
     }
     let (mut a, mut b) = (a, b);

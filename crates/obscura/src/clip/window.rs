@@ -26,13 +26,14 @@
 //! [`WindowError`]: the seed's half-plane-0 is defined by "the side the other vertices
 //! are on", which does not exist for a non-convex or degenerate polygon.
 
+use super::InRange;
 use glam::DVec2;
 
 /// Why a clipping window was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum WindowError {
-    /// A coordinate is NaN or infinite.
-    #[error("a window coordinate is not finite")]
+    /// A coordinate is NaN, infinite or beyond [`super::MAX_CLIP_COORDINATE`].
+    #[error("a window coordinate is not finite or beyond 1e300")]
     NonFinite,
     /// A rectangle with `min >= max` on some axis (no interior).
     #[error("the rectangle has no interior (min must be below max on both axes)")]
@@ -67,10 +68,10 @@ impl Rect {
     /// The rectangle `[xmin, xmax] x [ymin, ymax]`.
     ///
     /// # Errors
-    /// [`WindowError::NonFinite`] for NaN or infinite bounds,
+    /// [`WindowError::NonFinite`] for NaN, infinite or out-of-range bounds,
     /// [`WindowError::EmptyRectangle`] unless `xmin < xmax` and `ymin < ymax`.
     pub fn new(xmin: f64, ymin: f64, xmax: f64, ymax: f64) -> Result<Self, WindowError> {
-        if ![xmin, ymin, xmax, ymax].iter().all(|v| v.is_finite()) {
+        if ![xmin, ymin, xmax, ymax].iter().all(|v| v.in_range()) {
             return Err(WindowError::NonFinite);
         }
         if !(xmin < xmax && ymin < ymax) {
@@ -185,7 +186,7 @@ impl ConvexWindow {
     /// ```
     pub fn new(vertices: &[DVec2]) -> Result<Self, WindowError> {
         let n = vertices.len();
-        if vertices.iter().any(|v| !v.is_finite()) {
+        if vertices.iter().any(|v| !v.in_range()) {
             return Err(WindowError::NonFinite);
         }
         if n < 3 {
