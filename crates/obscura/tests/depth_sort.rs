@@ -517,14 +517,7 @@ fn empty_and_degenerate_input_gives_background() {
 #[test]
 fn conflicts_left_past_the_split_budget_still_give_the_zbuffer_image() {
     let scene = obscura::scene::random::interpenetrating_quads(30, 9, 1.0);
-    let vp = Viewport::new(256, 256).unwrap();
-    let v = prepare(
-        &scene,
-        &scene.default_camera(vp.aspect()),
-        vp,
-        &PrepareOptions::default(),
-    )
-    .unwrap();
+    let v = view(&scene, &scene.default_camera(1.0), 256, 256);
     for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
         let (frame, stats) = render(algorithm, &v, &RenderOptions::default()).unwrap();
         assert!(
@@ -540,14 +533,7 @@ fn conflicts_left_past_the_split_budget_still_give_the_zbuffer_image() {
 #[test]
 fn thousands_of_slivers_stop_sorting_at_the_comparison_budget() {
     let scene = obscura::scene::random::long_thin_triangles(3000, 9, 1.0);
-    let vp = Viewport::new(256, 256).unwrap();
-    let v = prepare(
-        &scene,
-        &scene.default_camera(vp.aspect()),
-        vp,
-        &PrepareOptions::default(),
-    )
-    .unwrap();
+    let v = view(&scene, &scene.default_camera(1.0), 256, 256);
     for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
         let (frame, stats) = render(algorithm, &v, &RenderOptions::default()).unwrap();
         let budget = 1024.0 * stats.get("polygons").unwrap() + f64::from(1u32 << 24);

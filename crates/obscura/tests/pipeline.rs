@@ -447,28 +447,18 @@ fn cameras_beyond_the_single_precision_range_are_refused() {
         },
         "beyond the largest distance",
     );
-    refused(
+    let ortho = |height: f64, near: f64, far: f64| {
         Camera::orthographic(
             DVec3::new(0., 0., 5.),
             DVec3::ZERO,
             DVec3::Y,
-            4.0,
-            -1e300,
-            1e300,
-        ),
-        "beyond the largest distance",
-    );
-    refused(
-        Camera::orthographic(
-            DVec3::new(0., 0., 5.),
-            DVec3::ZERO,
-            DVec3::Y,
-            1e39,
-            0.1,
-            100.0,
-        ),
-        "height",
-    );
+            height,
+            near,
+            far,
+        )
+    };
+    refused(ortho(4.0, -1e300, 1e300), "beyond the largest distance");
+    refused(ortho(1e39, 0.1, 100.0), "height");
 }
 
 #[test]
