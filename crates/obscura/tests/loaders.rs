@@ -1782,3 +1782,35 @@ fn side_files_that_are_not_regular_files_are_not_read() {
         e => panic!("expected an error naming the folder, got {e:?}"),
     }
 }
+
+#[test]
+fn ply_ascii_lines_with_more_values_than_the_header_are_errors() {
+    let dir = TempDir::new("ply-extra");
+    let header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                  property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    // Well formed (a trailing blank is not a value): loads.
+    let p = dir.write("ok.ply", format!("{header}0 0 0 \n1 0 0\n0 1 0\n3 0 1 2\n"));
+    assert_eq!(load(&p).face_count(), 1);
+    // A vertex line with two values too many (line 10, the first after the header).
+    let p = dir.write(
+        "vertex.ply",
+        format!("{header}0 0 0 7 7\n1 0 0\n0 1 0\n3 0 1 2\n"),
+    );
+    assert_at_line(
+        &load_err(&p),
+        &p,
+        10,
+        "vertex 0: 5 values on the line, the header's properties take 3",
+    );
+    // A face line longer than its list.
+    let p = dir.write(
+        "face.ply",
+        format!("{header}0 0 0\n1 0 0\n0 1 0\n3 0 1 2 5\n"),
+    );
+    assert_at_line(
+        &load_err(&p),
+        &p,
+        13,
+        "face 0: 5 values on the line, the header's properties take 4",
+    );
+}

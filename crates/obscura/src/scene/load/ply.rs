@@ -148,6 +148,21 @@ struct Body<'a> {
     text: String,
 }
 
+/// For an ASCII element line the parser accepted: `(values on the line, values its
+/// properties take)` when the line has more (the parser ignores them; they mean the
+/// line does not match the header), else `None`.
+fn extra_values(text: &str, def: &ElementDef) -> Option<(usize, usize)> {
+    let tokens: Vec<&str> = text.split_ascii_whitespace().collect();
+    let mut at = 0usize;
+    for p in def.properties.values() {
+        at += match p.data_type {
+            PropertyType::Scalar(_) => 1,
+            PropertyType::List(..) => 1 + tokens.get(at)?.parse::<usize>().ok()?,
+        };
+    }
+    (tokens.len() > at).then_some((tokens.len(), at))
+}
+
 impl Body<'_> {
     /// Reads element `index` of `def`; errors name it (and its line in ASCII files).
     fn read(&mut self, def: &ElementDef, index: usize) -> Result<Element> {
@@ -171,11 +186,23 @@ impl Body<'_> {
                 if n == 0 {
                     return Err(Error::parse(self.path, line, truncated()));
                 }
-                self.parser
+                let e = self
+                    .parser
                     .read_ascii_element(&self.text, def)
                     .map_err(|e| {
                         Error::parse(self.path, line, format!("{element}: {}", one_line(&e)))
-                    })
+                    })?;
+                if let Some((found, expected)) = extra_values(&self.text, def) {
+                    return Err(Error::parse(
+                        self.path,
+                        line,
+                        format!(
+                            "{element}: {found} values on the line, the header's properties \
+                             take {expected}"
+                        ),
+                    ));
+                }
+                Ok(e)
             }
             Encoding::BinaryLittleEndian | Encoding::BinaryBigEndian => {
                 let r = self.reader.get_mut();
