@@ -541,3 +541,21 @@ fn front_to_back_skips_hidden_and_offscreen_subtrees_without_changing_the_frame(
     assert_eq!(s.get("fragments_visited"), s.get("bsp_fragments"));
     assert_eq!(f2b.ids, b2f.ids);
 }
+
+#[test]
+fn tolerances_beyond_a_thousandth_of_the_scale_are_refused() {
+    let scene = demo::default_scene();
+    for (tolerance, ok) in [
+        (0.0, true),
+        (1e-3, true),
+        (2e-3, false),
+        (1e300, false),
+        (-1e-9, false),
+        (f64::NAN, false),
+    ] {
+        let mut options = BspOptions::default();
+        options.tolerance = tolerance;
+        assert_eq!(options.validate().is_ok(), ok, "{tolerance}");
+        assert_eq!(BspTree::build(&scene, &options).is_ok(), ok, "{tolerance}");
+    }
+}
