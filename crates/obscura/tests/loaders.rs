@@ -1814,3 +1814,44 @@ fn ply_ascii_lines_with_more_values_than_the_header_are_errors() {
         "face 0: 5 values on the line, the header's properties take 4",
     );
 }
+
+#[test]
+fn ply_headers_declaring_a_name_twice_are_errors() {
+    let dir = TempDir::new("ply-twice");
+    let body = "0 0 0 0\n1 0 0 0\n0 1 0 0\n3 0 1 2\n";
+    let header = |vertex_props: &str, extra: &str| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 3\n{vertex_props}{extra}element face 1\n\
+             property list uchar int vertex_indices\nend_header\n{body}"
+        )
+    };
+    // Line 5: the second "x" of the vertex element.
+    let p = dir.write(
+        "property.ply",
+        header(
+            "property float x\nproperty float x\nproperty float y\nproperty float z\n",
+            "",
+        ),
+    );
+    assert_at_line(&load_err(&p), &p, 5, "property \"x\" is declared twice");
+    // The same property name in two elements is fine.
+    let p = dir.write(
+        "two-elements.ply",
+        header(
+            "property float x\nproperty float y\nproperty float z\nproperty float w\n",
+            "",
+        )
+        .replace(
+            "property list uchar int vertex_indices",
+            "property float w\nproperty list uchar int vertex_indices",
+        )
+        .replace("3 0 1 2", "7 3 0 1 2"),
+    );
+    assert_eq!(load(&p).face_count(), 1);
+    // An element declared twice.
+    let p = dir.write(
+        "element.ply",
+        "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nelement vertex 0\nend_header\n",
+    );
+    assert_at_line(&load_err(&p), &p, 5, "element \"vertex\" is declared twice");
+}

@@ -236,6 +236,37 @@ impl Body<'_> {
     }
 }
 
+/// An error naming the header line that declares an element, or a property of one
+/// element, a second time: the header parser keeps one of them, so the body would be
+/// read with the wrong columns (ASCII) or misaligned (binary).
+fn check_unique_names(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut elements: Vec<String> = Vec::new();
+    let mut properties: Vec<String> = Vec::new();
+    for (k, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let line = String::from_utf8_lossy(line);
+        let mut words = line.split_ascii_whitespace();
+        let (kind, what, seen) = match words.next() {
+            Some("end_header") => break,
+            Some("element") => {
+                properties.clear();
+                ("element", words.next(), &mut elements)
+            }
+            Some("property") => ("property", words.last(), &mut properties),
+            _ => continue,
+        };
+        let Some(name) = what else { continue };
+        if seen.iter().any(|n| n == name) {
+            return Err(Error::parse(
+                path,
+                k + 1,
+                format!("PLY header: {kind} \"{name}\" is declared twice"),
+            ));
+        }
+        seen.push(name.to_string());
+    }
+    Ok(())
+}
+
 /// Loads a PLY file from its bytes (`path` names it in messages).
 pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     let parser = Parser::<Element>::new();
@@ -244,6 +275,7 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
         let line = e.line().unwrap_or(1);
         Error::parse(path, line, format!("PLY header: {}", one_line(&e)))
     })?;
+    check_unique_names(path, bytes)?;
     let line = reader.line().max(1);
     let vertex_def = header.elements.get("vertex");
     let face_def = header.elements.get("face");
