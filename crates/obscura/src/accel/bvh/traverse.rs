@@ -529,25 +529,37 @@ mod tests {
         );
     }
 
-    /// Rays whose numbers overflow `f32` (an eye far beyond the scene's range, which
-    /// `Camera::validate` refuses but the traversals must survive): no slot that holds
+    /// Rays whose numbers overflow `f32` (origins spread over an orthographic view 1e39
+    /// wide and more, which `Camera::validate` refuses but the traversals must survive): no slot that holds
     /// nothing is entered. Before the traversals checked occupied slots, an empty slot's
     /// sentinel child was taken for a leaf and indexed out of bounds.
     #[test]
     fn rays_beyond_single_precision_enter_no_empty_slot() {
         use crate::accel::bvh::packet::{PacketContext, PacketStack, RayPacket};
-        let scene = demo::default_scene();
+        // A cube: its BVH's root has empty slots.
+        let mut scene = crate::Scene::new();
+        scene
+            .add(crate::scene::ObjectDesc::new(
+                "cube",
+                demo::box_mesh(DVec3::splat(-1.0), DVec3::ONE),
+            ))
+            .unwrap();
         let tris = SceneTriangles::new(&scene);
         let bvh = Bvh::build(&tris, &BvhOptions::default());
-        let vp = Viewport::new(8, 8).unwrap();
-        let base = scene.default_camera(vp.aspect());
+        let vp = Viewport::new(24, 24).unwrap();
+        let base = crate::scene::Camera::perspective(
+            DVec3::new(2.0, 1.5, 4.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            60.0,
+            0.1,
+            100.0,
+        );
         let mut traced = 0;
-        for far_eye in [1e39, 1e60, 1e300] {
-            let dir = (base.eye - base.target).normalize();
+        for height in [1e39, 1e60, 1e300] {
+            // An orthographic view that wide puts the rays' origins beyond `f32`.
             let cam = crate::scene::Camera {
-                eye: base.target + dir * far_eye,
-                near: 1.0,
-                far: far_eye * 2.0,
+                projection: crate::scene::Projection::Orthographic { height },
                 ..base
             };
             let rays = PrimaryRays::new(&cam, vp);
