@@ -55,23 +55,18 @@ impl InRange for f64 {
     }
 }
 
-impl InRange for glam::DVec2 {
-    fn in_range(&self) -> bool {
-        self.is_finite() && self.abs().max_element() <= MAX_CLIP_COORDINATE
-    }
+/// The vectors: every coordinate in range (`max_element` alone would skip a NaN).
+macro_rules! in_range_for_vectors {
+    ($($v:ty),*) => {$(
+        impl InRange for $v {
+            fn in_range(&self) -> bool {
+                self.to_array().iter().all(InRange::in_range)
+            }
+        }
+    )*};
 }
 
-impl InRange for glam::DVec3 {
-    fn in_range(&self) -> bool {
-        self.is_finite() && self.abs().max_element() <= MAX_CLIP_COORDINATE
-    }
-}
-
-impl InRange for glam::DVec4 {
-    fn in_range(&self) -> bool {
-        self.is_finite() && self.abs().max_element() <= MAX_CLIP_COORDINATE
-    }
-}
+in_range_for_vectors!(glam::DVec2, glam::DVec3, glam::DVec4);
 
 use glam::DVec4;
 

@@ -120,16 +120,12 @@ impl Camera {
         let dir = self.target - self.eye;
         // A few units in the last place of the eye's coordinates: a camera framing a
         // small scene far from the origin (an object at 1e13) still has a direction.
-        if dir.length()
-            <= 8.0
-                * f64::EPSILON
-                * self
-                    .eye
-                    .abs()
-                    .max_element()
-                    .max(self.target.abs().max_element())
-            || dir.length() == 0.0
-        {
+        let scale = self
+            .eye
+            .abs()
+            .max_element()
+            .max(self.target.abs().max_element());
+        if dir.length() <= 8.0 * f64::EPSILON * scale {
             return bad("the eye is on the target: no view direction".into());
         }
         if !self.up.length().is_finite() {
