@@ -45,7 +45,15 @@ impl Plane {
     /// best fit for non-planar or nearly degenerate n-gons. The normal is unit length
     /// and points to the side from which the vertices are seen counter-clockwise.
     ///
-    /// Returns `None` for fewer than three points or a polygon of (numerically) zero area.
+    /// Returns `None` for fewer than three points or a polygon of (numerically) zero
+    /// area: twice its area (`|n|`) at most `1e-24 s^2`, `s` the largest absolute
+    /// coordinate. A polygon so small that this floor is below the rounding of its own
+    /// vertices (smaller than about `1e-10 s`, as every polygon of a view with a field
+    /// of view of `1e-12` degrees is) is judged against that rounding instead: it
+    /// keeps its plane while `|n|` exceeds `8 n_v eps s e` (`n_v` vertices, `e` their
+    /// largest coordinate difference from the first): to first order, the most that
+    /// rounding coordinates of magnitude `s` (by up to `eps s / 2` each) changes the
+    /// sum, whose `n_v` terms each move by at most `4 eps s e` per component.
     ///
     /// ```
     /// use obscura::geom::Plane;
@@ -65,8 +73,14 @@ impl Plane {
         let scale = points
             .iter()
             .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
-        // Twice the area is |n|; refuse areas below 1e-24 of the coordinate scale squared.
-        if !(len > 1e-24 * scale * scale) || !len.is_finite() {
+        // Twice the area is |n|: refuse areas below 1e-24 of the coordinate scale
+        // squared, or, for polygons tiny beside their coordinates, below what rounding
+        // can make of them.
+        let extent = points
+            .iter()
+            .fold(0.0f64, |m, &p| m.max((p - points[0]).abs().max_element()));
+        let noise = 8.0 * points.len() as f64 * f64::EPSILON * scale * extent;
+        if !(len > (1e-24 * scale * scale).min(noise)) || !len.is_finite() {
             return None;
         }
         let normal = n / len;
@@ -200,6 +214,27 @@ impl Plane {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn newell_keeps_the_plane_of_a_tiny_polygon_far_from_the_origin() {
+        // A square of side 1e-13, tilted 45 degrees about x, around z = -1.7 (the
+        // eye-space face of a cube seen with a field of view of 1e-12 degrees): its
+        // area is far below 1e-24 of its coordinates squared, but far above what
+        // rounding them can make.
+        let (c, s) = (0.5f64.sqrt(), 1e-13);
+        let quad: Vec<DVec3> = [(0., 0.), (s, 0.), (s, s), (0., s)]
+            .iter()
+            .map(|&(x, y)| DVec3::new(x, y * c, -1.7 + y * c))
+            .collect();
+        let p = Plane::newell(&quad).expect("a plane");
+        let want = DVec3::new(0.0, -c, c);
+        assert!((p.normal - want).length() < 1e-2, "{:?}", p.normal);
+        // Collinear points at that scale still have no plane.
+        let line: Vec<DVec3> = (0..4)
+            .map(|k| DVec3::new(f64::from(k) * s, 0.0, -1.7))
+            .collect();
+        assert!(Plane::newell(&line).is_none());
+    }
 
     #[test]
     fn cramer_reproduces_seed_004_task() {
