@@ -458,7 +458,43 @@ fn cameras_beyond_the_single_precision_range_are_refused() {
         )
     };
     refused(ortho(4.0, -1e300, 1e300), "beyond the largest distance");
+    // Directions from the eye are not resolved below about 1e-16 radians.
+    for fov in [1e-12, 1e-7] {
+        let narrow = Camera::perspective(ok.eye, ok.target, ok.up, fov, 0.1, 10.0);
+        refused(narrow, "smallest accepted");
+    }
     refused(ortho(1e39, 0.1, 100.0), "height");
+}
+
+#[test]
+fn very_narrow_views_give_every_image_space_algorithm_the_z_buffer_image() {
+    // An orthographic window 1e-12 high: the polygons' eye-space extents are about
+    // 1e-12 at coordinates about 4, so their areas are below 1e-24 of their
+    // coordinates squared. Depth sort used to find no plane for them and drew nothing.
+    // Also the narrowest perspective view accepted.
+    let s = unit_cube_scene();
+    let (eye, target) = (DVec3::new(2., 1.5, 4.), DVec3::new(0.1, 0.2, 0.3));
+    for cam in [
+        Camera::orthographic(eye, target, DVec3::Y, 1e-12, 0.1, 100.0),
+        Camera::orthographic(eye, target, DVec3::Y, 1e-13, 0.1, 100.0),
+        Camera::perspective(eye, target, DVec3::Y, Camera::MIN_FOV_DEGREES, 0.1, 100.0),
+    ] {
+        let vp = Viewport::new(24, 16).unwrap();
+        let view = prepare(&s, &cam, vp, &PrepareOptions::default()).unwrap();
+        let ro = RenderOptions::default();
+        let z = render(Algorithm::ZBuffer, &view, &ro).unwrap().0;
+        assert_eq!(z.covered_pixels(), 24 * 16, "{cam:?}");
+        for a in [
+            Algorithm::Scanline,
+            Algorithm::DepthSort,
+            Algorithm::DepthSortMatrix,
+            Algorithm::Bsp,
+            Algorithm::Warnock,
+        ] {
+            let f = render(a, &view, &ro).unwrap().0;
+            assert_eq!(f.ids, z.ids, "{} with {cam:?}", a.name());
+        }
+    }
 }
 
 #[test]

@@ -93,9 +93,19 @@ impl Camera {
         }
     }
 
+    /// The smallest perspective field of view accepted, in degrees. A direction from
+    /// the eye is resolved to about `f64::EPSILON` radians at best (the rounding of
+    /// `point - eye`), whatever the scene; at this field of view a pixel of the tallest
+    /// image ([`Viewport::MAX_SIDE`] rows) still spans about 4,800 times that. Narrower
+    /// views (tried down to `1e-14` degrees) made the algorithms that work in eye
+    /// space disagree with the z-buffer: polygons a few units in the last place wide,
+    /// with no reliable plane.
+    pub const MIN_FOV_DEGREES: f64 = 1e-6;
+
     /// Checks that the camera can produce an image: finite eye, target and up, a view
-    /// direction, an up vector not along it, `near < far`, a field of view in (0, 180)
-    /// degrees and `near > 0` (perspective) or a positive height (orthographic). Every
+    /// direction, an up vector not along it, `near < far`, a field of view in
+    /// [[`Camera::MIN_FOV_DEGREES`], 180) degrees and `near > 0` (perspective) or a
+    /// positive height (orthographic). Every
     /// position, distance and height must lie within [`super::MAX_COORDINATE`], and a
     /// perspective camera's `far / near` at most that too: its depth keys `near /
     /// depth` are stored in single precision.
@@ -154,6 +164,14 @@ impl Camera {
                 if !(fov_y_degrees > 0.0 && fov_y_degrees < 180.0) {
                     return bad(format!(
                         "field of view {fov_y_degrees} degrees is not in (0, 180)"
+                    ));
+                }
+                if fov_y_degrees < Self::MIN_FOV_DEGREES {
+                    return bad(format!(
+                        "field of view {fov_y_degrees:e} degrees is below the smallest \
+                         accepted, {:e}: directions from the eye are not resolved that \
+                         finely in double precision",
+                        Self::MIN_FOV_DEGREES
                     ));
                 }
                 if !(self.near > 0.0) {
