@@ -372,6 +372,20 @@ fn obj_quads_kept_and_nonplanar_quads_triangulated_with_one_id() {
 }
 
 #[test]
+fn obj_coordinates_out_of_range_are_named_not_taken_for_degenerate_faces() {
+    // Areas of faces at 1e200 overflow: the faces used to be dropped as degenerate and
+    // the file reported empty.
+    let dir = TempDir::new("obj-huge");
+    let p = dir.write(
+        "huge.obj",
+        "v 1e200 0 0\nv 0 1e200 0\nv 0 0 1e200\nv 1e200 1e200 0\nf 1 2 3\nf 1 4 2 3\n",
+    );
+    let e = load_err(&p).to_string();
+    assert!(e.contains("largest coordinate accepted"), "{e}");
+    assert!(!e.contains("empty"), "{e}");
+}
+
+#[test]
 fn obj_degenerate_faces_are_dropped_counted_and_keep_their_ids() {
     let dir = TempDir::new("obj-degenerate");
     let p = dir.write(

@@ -228,6 +228,37 @@ pub const PLANARITY_TOLERANCE: f64 = 1e-6;
 /// diameter squared has zero area.
 pub const DEGENERACY_TOLERANCE: f64 = 1e-14;
 
+/// Whether a triangle has zero area by [`DEGENERACY_TOLERANCE`], at any scale.
+fn triangle_is_degenerate(a: DVec3, b: DVec3, c: DVec3) -> bool {
+    let test = |p: &[DVec3]| {
+        let (a, b, c) = (p[0], p[1], p[2]);
+        let n = (b - a).cross(c - a);
+        let diam2 = (b - a)
+            .length_squared()
+            .max((c - a).length_squared())
+            .max((c - b).length_squared());
+        !(n.length() > DEGENERACY_TOLERANCE * diam2)
+    };
+    let p = [a, b, c];
+    // Rarely taken: a zero-area verdict that may come from overflow or underflow.
+    test(&p) && normalizing_scale(&p).is_none_or(|k| test(&p.map(|v| v * k)))
+}
+
+/// The power of two that brings the points' largest coordinate near 1, when their own
+/// scale can overflow or underflow the products of the face tests (a coordinate
+/// beyond 1e150, or all below 1e-150; the tests are scale-free otherwise). `None`
+/// for a normal scale, or zero or not finite.
+fn normalizing_scale(points: &[DVec3]) -> Option<f64> {
+    let s = points
+        .iter()
+        .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    if !(s.is_finite() && s > 0.0) || (1e-150..=1e150).contains(&s) {
+        return None;
+    }
+    // A power of two: the scaling itself rounds nothing (short of subnormals).
+    Some(2f64.powi(-(s.log2().round() as i32)))
+}
+
 /// Builds a [`Mesh`] from vertices and faces, applying the rules of the module doc.
 #[derive(Debug, Default)]
 pub struct MeshBuilder {
@@ -325,12 +356,7 @@ impl MeshBuilder {
                 pos[indices[1] as usize],
                 pos[indices[2] as usize],
             );
-            let n = (b - a).cross(c - a);
-            let diam2 = (b - a)
-                .length_squared()
-                .max((c - a).length_squared())
-                .max((c - b).length_squared());
-            if !(n.length() > DEGENERACY_TOLERANCE * diam2) {
+            if triangle_is_degenerate(a, b, c) {
                 self.report.degenerate_faces += 1;
                 return FaceOutcome::Dropped;
             }
@@ -359,6 +385,12 @@ impl MeshBuilder {
             self.report.degenerate_faces += 1;
             return FaceOutcome::Dropped;
         }
+        // Every test below is scale-free: done on points scaled near 1 where their own
+        // scale would overflow or underflow the products.
+        if let Some(k) = normalizing_scale(points) {
+            self.points.iter_mut().for_each(|p| *p *= k);
+        }
+        let points = &self.points;
         let normal = geom::newell_normal(points);
         let diameter = geom::Aabb::from_points(points.iter().copied())
             .extent()
@@ -390,8 +422,8 @@ impl MeshBuilder {
                         scratch[t[1] as usize],
                         scratch[t[2] as usize],
                     ];
-                    let p = &self.mesh.positions;
-                    let (a, b, c) = (p[tri[0] as usize], p[tri[1] as usize], p[tri[2] as usize]);
+                    let p = &self.points;
+                    let (a, b, c) = (p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]);
                     // Skip slivers of zero area that ear clipping can leave on collinear runs.
                     if (b - a).cross(c - a).length() > DEGENERACY_TOLERANCE * diameter * diameter {
                         self.emit(&tri, face);
@@ -435,6 +467,50 @@ mod tests {
             b.push_position(DVec3::new(x, y, z));
         }
         b
+    }
+
+    #[test]
+    fn face_tests_do_not_depend_on_the_scale() {
+        // The same faces at 1e-200, 1, 1e200 and 1e308: products of coordinates
+        // (areas, squared diameters) underflowed or overflowed, so every face was
+        // dropped as degenerate and a file of huge coordinates was reported empty
+        // instead of out of range.
+        for k in [1e-200, 1.0, 1e200, 1e308] {
+            let mut b = builder(&[
+                (0., 0., 0.),
+                (k, 0., 0.),
+                (k, k, 0.),
+                (0., k, 0.),
+                (0.5 * k, 0.25 * k, 0.),
+                (-k, 0., 0.),
+            ]);
+            assert_eq!(b.push_face(&[5, 1, 2], None), Ok(FaceOutcome::Kept), "{k}");
+            // Non-convex: triangulated, both triangles kept.
+            assert_eq!(
+                b.push_face(&[0, 1, 2, 4, 3], None),
+                Ok(FaceOutcome::Triangulated(3)),
+                "{k}"
+            );
+            assert_eq!(
+                b.push_face(&[0, 1, 2, 3], None),
+                Ok(FaceOutcome::Kept),
+                "{k}"
+            );
+            // Collinear: still degenerate at every scale.
+            assert_eq!(
+                b.push_face(&[5, 0, 1], None),
+                Ok(FaceOutcome::Dropped),
+                "{k}"
+            );
+            assert_eq!(
+                b.push_face(&[5, 0, 1, 0], None),
+                Ok(FaceOutcome::Dropped),
+                "{k}"
+            );
+            let (m, r) = b.finish();
+            assert_eq!(r.degenerate_faces, 2, "{k}");
+            assert_eq!(m.polygon_count(), 5, "{k}");
+        }
     }
 
     #[test]
