@@ -917,3 +917,130 @@ proptest! {
         }
     }
 }
+
+/// Triangles in the plane z = 0 (`flat`) or in a box, inside `[-1, 1]^3`, scaled by
+/// `size` and moved to `centre`; one triangle across the box for `count` 1.
+fn scaled_triangles(count: usize, seed: u64, flat: bool, size: f64, centre: DVec3) -> Scene {
+    let mut rng = demo::SplitMix64(seed);
+    let mut b = MeshBuilder::new();
+    if count == 1 {
+        // One triangle across the whole box.
+        for p in [
+            DVec3::new(-1.0, -1.0, 0.0),
+            DVec3::new(1.0, -1.0, 0.0),
+            DVec3::new(0.0, 1.0, if flat { 0.0 } else { 0.5 }),
+        ] {
+            b.push_position(centre + p * size);
+        }
+        b.push_face(&[0, 1, 2], None).unwrap();
+    }
+    for _ in 0..if count == 1 { 0 } else { count } {
+        let c = DVec3::new(
+            rng.range(-0.8, 0.8),
+            rng.range(-0.8, 0.8),
+            if flat { 0.0 } else { rng.range(-0.8, 0.8) },
+        );
+        let first = b.vertex_count() as u32;
+        for _ in 0..3 {
+            let p = c + DVec3::new(
+                rng.range(-0.2, 0.2),
+                rng.range(-0.2, 0.2),
+                if flat { 0.0 } else { rng.range(-0.2, 0.2) },
+            );
+            b.push_position(centre + p * size);
+        }
+        b.push_face(&[first, first + 1, first + 2], None).unwrap();
+    }
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("soup", b.finish().0)).unwrap();
+    s
+}
+
+/// Scenes tiny against their distance from the eye or from the origin, flat or not:
+/// the grid's cells are then far finer than the rounding of the rays' parameters, and
+/// it must still give brute force's frame bit for bit (it lost up to half the pixels of
+/// a flat triangle 1e-10 wide seen from 5 away, or 1 wide seen from 1e11).
+#[test]
+fn grid_equals_brute_force_on_scenes_tiny_against_their_distance() {
+    let vp = Viewport::new(24, 24).unwrap();
+    let ro = RenderOptions::default();
+    let mut failures = Vec::new();
+    let mut far_rays = 0.0;
+    let mut case = 0u64;
+    for &(size, dist, off) in &[
+        (1e-10, 5.0, 0.0),
+        (1e-12, 5.0, 0.0),
+        (1e-14, 5.0, 0.0),
+        (1e-9, 5.0, 3.0),
+        (1e-12, 5.0, 1.0),
+        (1.0, 1e9, 0.0),
+        (1.0, 1e11, 0.0),
+        (1.0, 1e12, 0.0),
+        (1.0, 1e14, 0.0),
+        (1e-3, 1e8, 7.0),
+        (1e3, 1e15, 1e3),
+    ] {
+        for flat in [true, false] {
+            for count in [1usize, 40] {
+                for dir in [DVec3::Z, DVec3::new(0.3, -0.5, 1.0).normalize()] {
+                    case += 1;
+                    let centre = DVec3::new(off, -off * 0.5, off * 0.25);
+                    let scene = scaled_triangles(count, case, flat, size, centre);
+                    let eye = centre + dir * dist;
+                    let half = (1.25 * size / dist).atan().to_degrees() * 2.0;
+                    for (kind, cam) in [
+                        (
+                            "persp",
+                            Camera::perspective(
+                                eye,
+                                centre,
+                                DVec3::Y,
+                                half,
+                                dist * 0.5,
+                                dist * 2.0,
+                            ),
+                        ),
+                        (
+                            "ortho",
+                            Camera::orthographic(
+                                eye,
+                                centre,
+                                DVec3::Y,
+                                2.5 * size,
+                                dist * 0.5,
+                                dist * 2.0,
+                            ),
+                        ),
+                    ] {
+                        let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+                        let (brute, _) = render(Algorithm::Raycast, &view, &ro).unwrap();
+                        let (grid, _) = render(Algorithm::RaycastGrid, &view, &ro).unwrap();
+                        // A grid built without knowing the view: rays too far for its
+                        // cells are traced against every triangle.
+                        let tris = SceneTriangles::new(&scene);
+                        let prebuilt = UniformGrid::build(&tris, &GridOptions::default());
+                        let (other, stats) =
+                            raycast::render_grid(&view, &tris, &prebuilt, &ro).unwrap();
+                        far_rays += stats.get("far_rays").unwrap();
+                        let name = format!(
+                            "size {size:e} dist {dist:e} off {off} flat {flat} n {count} dir {dir:?} {kind}"
+                        );
+                        for (which, f) in [("grid", &grid), ("prebuilt grid", &other)] {
+                            let d = brute.differences(f).len();
+                            if d > 0 {
+                                failures.push(format!(
+                                    "{name} {which}: {d} pixels differ (brute force covers {}, grid {})",
+                                    brute.covered_pixels(),
+                                    f.covered_pixels()
+                                ));
+                            }
+                        }
+                        assert!(brute.covered_pixels() > 0, "{name}");
+                    }
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(far_rays > 0.0);
+}

@@ -20,18 +20,45 @@
 //! A triangle goes into every cell its bounding box touches *and* that it really
 //! overlaps, by the separating-axis test of Akenine-Möller ("Fast 3D Triangle-Box
 //! Overlap Testing", 2001: the 3 box normals, the triangle's normal and the 9 edge
-//! cross products). Cells are grown by `10^-7` of their size for this test, so a
-//! triangle touching a cell's face is in both cells and rounding in the traversal
-//! cannot lose it.
+//! cross products). Cells are grown for this test by `10^-7` of their size or by
+//! `4 τ` (below), whichever is larger, so a triangle touching a cell's face is in
+//! both cells and rounding in the traversal cannot lose it.
 //!
 //! # Traversal
-//! The ray is clipped to the grid's box and `[t_min, t_max]`; each visited cell covers
-//! `[t_enter, t_exit]` of the ray (consecutive cells share the boundary value, so the
-//! intervals tile the ray exactly). A hit on a triangle of the cell is accepted only if
-//! its parameter lies in that interval: a hit outside the cell is refused there (and
-//! accepted in its own cell, which the triangle also occupies). The walk stops after
-//! the first cell that produced a hit nearer than its exit (at exactly the exit, the
-//! next cell may still offer an equal-distance hit with a lower face id).
+//! The ray is clipped to the grid's box grown by `τ` and to `[t_min, t_max]`, and
+//! walks the cells it crosses. A hit on a triangle of the cell is accepted only if it
+//! lies in that cell grown by `τ` (its parameter is within the ray's interval in the
+//! grown cell, from the cell's faces on each axis: `[entry_k - τ/|d_k|, exit_k +
+//! τ/|d_k|]`): a hit in a later cell is refused there (and accepted in its own cell,
+//! which the triangle also occupies). The walk stops after the first cell whose nearest
+//! hit lies before the exit of the cell shrunk by `τ` (a triangle met in a later cell
+//! is hit there or farther; at or after that point, a later cell may still offer a
+//! nearer hit or an equal-distance one with a lower face id).
+//!
+//! # Rounding
+//! The hit parameter and the faces' parameters are rounded values, with errors that
+//! grow with the coordinates involved, not with the cells: the watertight test
+//! subtracts the origin from the vertices and the walk subtracts it from the faces'
+//! coordinates, each exact to about `4 ε` of `|o|∞ + |bounds|∞` as a position along
+//! the ray (`ε` the `f64` epsilon). A cell can be far thinner than that: a flat scene's
+//! box is a padding thick (`10^-6` of its extent), and a scene 1 across seen from
+//! `10^11` away or 10^-10 across seen from 5 away has cells below the spacing of the
+//! ray's parameters. Comparing the parameters exactly then lost hits that fall, by
+//! rounding, just outside every cell (half the pixels of a flat triangle in such
+//! views). So hits are accepted within `τ = 64 ε (|o|∞ + |bounds|∞)` of the cell
+//! ([`ROUNDING`]): twice the two errors above with a factor 4 to spare for the test's
+//! edge functions. `τ` is a relative bound, a few hundred units in the last place of
+//! the largest coordinate: it cannot accept a hit the exact walk would place in a
+//! distant cell, and since the stopping point is moved back by the same `τ`, no nearer
+//! hit in a later cell is missed.
+//!
+//! Accepting within `τ` is only safe if the triangle is listed in the cell, so the
+//! binning grows cells by `4 τ` for the largest origin the grid is built for
+//! ([`GridOptions::ray_origins`], which the renderer sets from the camera), and no
+//! cell is made finer than `1024 τ` (finer cells could not be told apart by the rays).
+//! A ray from an origin farther than the grid was built for (its `τ` more than a
+//! quarter of the growth) is traced against every triangle instead, and counted
+//! ([`GridCounters::far_rays`]).
 //!
 //! Mailboxing (Amanatides and Woo): a triangle spanning several cells would be tested
 //! again in each. A per-thread [`Mailbox`] keeps, per triangle, the ray that tested it
@@ -59,6 +86,10 @@ pub struct GridOptions {
     pub density: f64,
     /// The most cells allowed.
     pub max_cells: usize,
+    /// The largest coordinate (absolute value) of the origins of the rays the grid will
+    /// trace: cells are grown and sized for their rounding (see "Rounding" in the
+    /// module doc). Rays from farther origins are traced against every triangle.
+    pub ray_origins: f64,
 }
 
 impl GridOptions {
@@ -68,6 +99,14 @@ impl GridOptions {
         self.density = density;
         self
     }
+
+    /// These options for rays whose origins have coordinates up to `magnitude` in
+    /// absolute value.
+    #[must_use]
+    pub fn with_ray_origins(mut self, magnitude: f64) -> Self {
+        self.ray_origins = magnitude;
+        self
+    }
 }
 
 impl Default for GridOptions {
@@ -75,9 +114,15 @@ impl Default for GridOptions {
         GridOptions {
             density: 2.0,
             max_cells: 1 << 24,
+            ray_origins: 0.0,
         }
     }
 }
+
+/// The rounding bound of the traversal, relative to the coordinates involved: a ray
+/// from `o` locates its hits and the cells' faces to within
+/// `τ = ROUNDING (|o|∞ + |bounds|∞)` (see "Rounding" in the module doc).
+pub const ROUNDING: f64 = 64.0 * f64::EPSILON;
 
 /// Figures of a build.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -96,6 +141,10 @@ pub struct GridStats {
 #[derive(Clone, Debug, Default)]
 pub struct UniformGrid {
     bounds: Aabb,
+    /// `|bounds|∞`, the largest coordinate of the box in absolute value.
+    magnitude: f64,
+    /// The largest rounding bound `τ` the binning covers (a quarter of its growth).
+    max_tau: f64,
     resolution: [u32; 3],
     cell_size: DVec3,
     starts: Vec<u32>,
@@ -144,6 +193,9 @@ pub struct GridCounters {
     pub triangles: u64,
     /// Tests answered by the mailbox (a triangle met again in a later cell).
     pub mailbox_hits: u64,
+    /// Rays from origins too far for the grid's cells (beyond
+    /// [`GridOptions::ray_origins`]), traced against every triangle.
+    pub far_rays: u64,
 }
 
 impl std::ops::AddAssign for GridCounters {
@@ -151,6 +203,7 @@ impl std::ops::AddAssign for GridCounters {
         self.cells += o.cells;
         self.triangles += o.triangles;
         self.mailbox_hits += o.mailbox_hits;
+        self.far_rays += o.far_rays;
     }
 }
 
@@ -159,7 +212,8 @@ impl std::ops::AddAssign for GridCounters {
 pub struct GridHit {
     /// The nearest hit.
     pub hit: ClosestHit,
-    /// The cell `(x, y, z)` where it was accepted (`None` without a hit).
+    /// The cell `(x, y, z)` where it was accepted (`None` without a hit, or for a
+    /// ray traced against every triangle, see [`GridCounters::far_rays`]).
     pub cell: Option<[u32; 3]>,
 }
 
@@ -185,7 +239,11 @@ impl UniformGrid {
             min: raw.min - DVec3::splat(pad),
             max: raw.max + DVec3::splat(pad),
         };
-        let resolution = resolution(bounds.extent(), n, options);
+        let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element();
+        // The rounding of the rays the grid is built for; cells no finer than 1024 of
+        // it, so that growing them by 4 of it (below) keeps them nearly disjoint.
+        let tau = ROUNDING * (options.ray_origins.abs() + magnitude);
+        let resolution = resolution(bounds.extent(), n, options, 1024.0 * tau);
         let cell_size = bounds.extent()
             / DVec3::new(
                 f64::from(resolution[0]),
@@ -193,11 +251,13 @@ impl UniformGrid {
                 f64::from(resolution[2]),
             );
         grid.bounds = bounds;
+        grid.magnitude = magnitude;
         grid.resolution = resolution;
         grid.cell_size = cell_size;
         let cells = resolution.iter().map(|&r| r as usize).product::<usize>();
         // (cell, triangle) pairs, then a counting sort by cell.
-        let grow = cell_size * 1e-7;
+        let grow = (cell_size * 1e-7).max(DVec3::splat(4.0 * tau));
+        grid.max_tau = grow.min_element() * 0.25;
         let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(n * 2);
         for (t, tri) in triangles.vertices().iter().enumerate() {
             let lo = tri[0].min(tri[1]).min(tri[2]) - grow;
@@ -364,13 +424,19 @@ impl UniformGrid {
             return out;
         }
         let (o, d) = (ctx.ray.origin, ctx.ray.direction);
+        // The ray's rounding (see "Rounding" in the module doc).
+        let tau = ROUNDING * (o.abs().max_element() + self.magnitude);
+        if !(tau <= self.max_tau) {
+            counters.far_rays += 1;
+            return self.every_triangle::<O>(triangles, ctx, t_max, counters);
+        }
         let (mut t0, mut t1) = (ctx.t_min, t_max);
         for k in 0..3 {
             if !crate::geom::obb::slab(
                 o[k],
                 d[k],
-                self.bounds.min[k],
-                self.bounds.max[k],
+                self.bounds.min[k] - tau,
+                self.bounds.max[k] + tau,
                 &mut t0,
                 &mut t1,
             ) {
@@ -399,13 +465,28 @@ impl UniformGrid {
                 _ => f64::INFINITY,
             }
         };
+        // The parameter where the ray enters the current cell's slab on axis k.
+        let entry = |k: usize, c: u32| -> f64 {
+            match step[k] {
+                1 => (self.bounds.min[k] + f64::from(c) * self.cell_size[k] - o[k]) / d[k],
+                -1 => (self.bounds.min[k] + f64::from(c + 1) * self.cell_size[k] - o[k]) / d[k],
+                _ => f64::NEG_INFINITY,
+            }
+        };
+        // The slack `τ / |d_k|` that grows the cell by `τ` on axis k, in ray parameter
+        // (none on an axis the ray is parallel to: its slab is unbounded).
+        let slack: [f64; 3] =
+            std::array::from_fn(|k| if step[k] == 0 { 0.0 } else { tau / d[k].abs() });
         let mut next = [exit(0, cell[0]), exit(1, cell[1]), exit(2, cell[2])];
+        // The ray's interval in the current cell grown by `τ`: `[max lo, min hi]`.
+        let mut lo: [f64; 3] = std::array::from_fn(|k| entry(k, cell[k]) - slack[k]);
+        let mut hi: [f64; 3] = std::array::from_fn(|k| next[k] + slack[k]);
         let (verts, polys) = (triangles.vertices(), triangles.triangle_polygons());
-        let mut t_enter = t0;
         mailbox.next_ray();
         let ray_id = mailbox.ray;
         loop {
-            let t_exit = next[0].min(next[1]).min(next[2]).min(t1).max(t_enter);
+            let t_enter = lo[0].max(lo[1]).max(lo[2]);
+            let t_exit = hi[0].min(hi[1]).min(hi[2]);
             counters.cells += 1;
             for &tri in self.cell_triangles(cell) {
                 let slot = tri as usize;
@@ -426,7 +507,8 @@ impl UniformGrid {
                     mailbox.result[slot] = t;
                     t
                 };
-                // The seed's rule: only a hit inside this cell is accepted here.
+                // The seed's rule: only a hit inside this cell (grown by `τ`) is
+                // accepted here.
                 if t >= t_enter && t <= t_exit {
                     let before = out.hit;
                     out.hit.offer(t, ctx.faces[polys[tri as usize] as usize]);
@@ -435,7 +517,14 @@ impl UniformGrid {
                     }
                 }
             }
-            if out.hit.is_hit() && out.hit.t < t_exit {
+            // Done when the hit is nearer than any point beyond the cell (shrunk by
+            // `τ`) can be: a triangle met later has its hit there or farther.
+            if out.hit.is_hit()
+                && out.hit.t
+                    < (next[0] - slack[0])
+                        .min(next[1] - slack[1])
+                        .min(next[2] - slack[2])
+            {
                 return out;
             }
             // Step across the nearest face.
@@ -454,14 +543,44 @@ impl UniformGrid {
                 return out;
             }
             cell[k] = c as u32;
+            lo[k] = next[k] - slack[k];
             next[k] = exit(k, cell[k]);
-            t_enter = t_exit;
+            hi[k] = next[k] + slack[k];
         }
+    }
+
+    /// The nearest hit by testing every triangle, for a ray whose rounding the cells
+    /// do not cover.
+    #[cold]
+    fn every_triangle<O: AxisOrder>(
+        &self,
+        triangles: &SceneTriangles,
+        ctx: &HitContext<'_>,
+        t_max: f64,
+        counters: &mut GridCounters,
+    ) -> GridHit {
+        let mut hit = ClosestHit::new(t_max);
+        for (tri, &poly) in triangles
+            .vertices()
+            .iter()
+            .zip(triangles.triangle_polygons())
+        {
+            counters.triangles += u64::from(ctx.test::<O>(tri, poly, t_max, &mut hit));
+        }
+        GridHit { hit, cell: None }
+    }
+
+    /// The rounding bound `τ` of a ray from `origin` (see "Rounding" in the module
+    /// doc): its hits are accepted in a cell when they lie in the cell grown by `τ`.
+    #[must_use]
+    pub fn rounding(&self, origin: DVec3) -> f64 {
+        ROUNDING * (origin.abs().max_element() + self.magnitude)
     }
 }
 
-/// Cells per axis for `n` triangles in a box of extent `e` (see the module doc).
-fn resolution(e: DVec3, n: usize, options: &GridOptions) -> [u32; 3] {
+/// Cells per axis for `n` triangles in a box of extent `e` (see the module doc), none
+/// smaller than `min_cell` where the axis allows more than one.
+fn resolution(e: DVec3, n: usize, options: &GridOptions, min_cell: f64) -> [u32; 3] {
     const MAX_AXIS: f64 = 2048.0;
     let target = (options.density.max(1e-3) * n as f64).clamp(1.0, options.max_cells.max(1) as f64);
     let mut res = [1.0f64; 3];
@@ -489,7 +608,14 @@ fn resolution(e: DVec3, n: usize, options: &GridOptions) -> [u32; 3] {
             break;
         }
     }
-    let mut res = res.map(|r| r.clamp(1.0, MAX_AXIS));
+    let mut res: [f64; 3] = std::array::from_fn(|k| {
+        let finest = if min_cell > 0.0 {
+            (e[k] / min_cell).floor()
+        } else {
+            MAX_AXIS
+        };
+        res[k].min(finest).clamp(1.0, MAX_AXIS)
+    });
     while res.iter().product::<f64>() > options.max_cells.max(1) as f64 {
         res = res.map(|r| (r * 0.9).floor().max(1.0));
     }
@@ -593,19 +719,22 @@ mod tests {
     fn resolution_follows_the_heuristic() {
         let o = GridOptions::default();
         // A cube of 1000 triangles: 2000 cells, about 12.6 per axis.
-        assert_eq!(resolution(DVec3::ONE, 1000, &o), [13, 13, 13]);
+        assert_eq!(resolution(DVec3::ONE, 1000, &o, 0.0), [13, 13, 13]);
         // A flat square: 2 * 800 cells in 2D, 40 x 40 x 1.
-        assert_eq!(resolution(DVec3::new(2.0, 0.0, 2.0), 800, &o), [40, 1, 40]);
+        assert_eq!(
+            resolution(DVec3::new(2.0, 0.0, 2.0), 800, &o, 0.0),
+            [40, 1, 40]
+        );
         // Long and thin: the thin axes get one cell, the long one all of them.
         assert_eq!(
-            resolution(DVec3::new(100.0, 0.01, 0.01), 50, &o),
+            resolution(DVec3::new(100.0, 0.01, 0.01), 50, &o, 0.0),
             [100, 1, 1]
         );
         let capped = GridOptions {
             max_cells: 1000,
             ..o
         };
-        let r = resolution(DVec3::ONE, 1_000_000, &capped);
+        let r = resolution(DVec3::ONE, 1_000_000, &capped, 0.0);
         assert!(r.iter().map(|&x| x as usize).product::<usize>() <= 1000);
     }
 

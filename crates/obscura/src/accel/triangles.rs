@@ -295,6 +295,20 @@ impl PrimaryRays {
         }
     }
 
+    /// The largest coordinate, in absolute value, of the rays' origins: the eye's for
+    /// a perspective camera; for an orthographic one, whose rays start across the
+    /// window on the eye plane, the eye's plus the window's half extents (`right` and
+    /// `up` are unit vectors).
+    #[must_use]
+    pub fn origin_magnitude(&self) -> f64 {
+        let eye = self.eye.abs().max_element();
+        if self.orthographic {
+            eye + self.half_width.abs() + self.half_height.abs()
+        } else {
+            eye
+        }
+    }
+
     /// The rule that decides rays exactly on an edge (see the module doc).
     #[must_use]
     pub fn tie_rule(&self) -> TieRule {

@@ -98,6 +98,8 @@ pub struct RayCounters {
     pub hits_outside_cell: u64,
     /// Grid tests answered by the mailbox.
     pub mailbox_hits: u64,
+    /// Grid rays from origins too far for its cells, traced against every triangle.
+    pub far_rays: u64,
     /// BVH nodes visited by packets of rays (each counts once for the packet).
     pub packet_nodes: u64,
 }
@@ -112,6 +114,7 @@ impl AddAssign for RayCounters {
         self.cells += o.cells;
         self.hits_outside_cell += o.hits_outside_cell;
         self.mailbox_hits += o.mailbox_hits;
+        self.far_rays += o.far_rays;
         self.packet_nodes += o.packet_nodes;
     }
 }
@@ -133,7 +136,12 @@ pub fn render(
             render_bvh(view, &triangles, &bvh, options)
         }
         Acceleration::Grid => {
-            let grid = UniformGrid::build(&triangles, &GridOptions::default());
+            // Cells sized for the rounding of this view's rays (see `accel::grid`).
+            let origins = PrimaryRays::new(view.camera(), view.viewport()).origin_magnitude();
+            let grid = UniformGrid::build(
+                &triangles,
+                &GridOptions::default().with_ray_origins(origins),
+            );
             render_grid(view, &triangles, &grid, options)
         }
     }?;
@@ -440,12 +448,15 @@ pub fn render_grid(
             counters.cells += c.cells;
             counters.triangle_tests += c.triangles;
             counters.mailbox_hits += c.mailbox_hits;
+            counters.far_rays += c.far_rays;
             if let Some(cell) = out.cell {
                 // The seed's rule, checked independently of the traversal's parameters:
                 // the accepted point must lie in the accepted cell.
                 let (lo, hi) = grid.cell_box(cell);
                 let p = ctx.ray.origin + ctx.ray.direction * out.hit.t;
-                let tol = (hi - lo) * 1e-6 + p.abs() * 1e-12;
+                // The cell is grown by the ray's rounding bound `τ` for acceptance;
+                // computing `p` rounds by less than `τ` again.
+                let tol = (hi - lo) * 1e-6 + DVec3::splat(2.0 * grid.rounding(ctx.ray.origin));
                 if !(p.cmpge(lo - tol).all() && p.cmple(hi + tol).all()) {
                     counters.hits_outside_cell += 1;
                 }
@@ -471,6 +482,7 @@ pub fn render_grid(
     );
     stats.set("mailbox_hits", counters.mailbox_hits as f64);
     stats.set("hits_outside_cell", counters.hits_outside_cell as f64);
+    stats.set("far_rays", counters.far_rays as f64);
     Ok((frame, stats))
 }
 
