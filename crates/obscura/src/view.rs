@@ -485,8 +485,8 @@ pub fn prepare<'s>(
     viewport: Viewport,
     options: &PrepareOptions,
 ) -> Result<PreparedView<'s>> {
-    camera.validate()?;
     viewport.validate()?;
+    camera.validate_for(viewport)?;
     let t = ViewTransform::new(camera, viewport);
     let mut stats = PipelineStats::default();
     let threads = passes::thread_count();

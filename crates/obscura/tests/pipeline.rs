@@ -458,11 +458,20 @@ fn cameras_beyond_the_single_precision_range_are_refused() {
         )
     };
     refused(ortho(4.0, -1e300, 1e300), "beyond the largest distance");
-    // Directions from the eye are not resolved below about 1e-16 radians.
-    for fov in [1e-12, 1e-7] {
+    // Directions from the eye are not resolved below about 1e-16 radians: a pixel
+    // must span 64 times that (1e-13 degrees over 64 rows, 1e-9 over 10,000 rows).
+    for (fov, rows) in [(1e-13, 64), (1e-9, 10_000), (1e-12, 2)] {
         let narrow = Camera::perspective(ok.eye, ok.target, ok.up, fov, 0.1, 10.0);
-        refused(narrow, "smallest accepted");
+        assert!(narrow.validate().is_ok());
+        let vp = Viewport::new(rows, rows).unwrap();
+        let e = narrow.validate_for(vp).unwrap_err().to_string();
+        assert!(e.contains("smallest accepted"), "{e}");
+        let scene = unit_cube_scene();
+        let view = prepare(&scene, &narrow, vp, &PrepareOptions::default());
+        assert!(view.is_err(), "fov {fov} over {rows} rows");
     }
+    let fine = Camera::perspective(ok.eye, ok.target, ok.up, 1e-10, 0.1, 10.0);
+    assert!(fine.validate_for(Viewport::new(64, 64).unwrap()).is_ok());
     refused(ortho(1e39, 0.1, 100.0), "height");
 }
 
@@ -471,13 +480,14 @@ fn very_narrow_views_give_every_image_space_algorithm_the_z_buffer_image() {
     // An orthographic window 1e-12 high: the polygons' eye-space extents are about
     // 1e-12 at coordinates about 4, so their areas are below 1e-24 of their
     // coordinates squared. Depth sort used to find no plane for them and drew nothing.
-    // Also the narrowest perspective view accepted.
+    // Also the narrowest perspective view accepted (16 rows).
+    let narrowest = (Camera::MIN_PIXEL_ANGLE * 16.0 * 1.01).to_degrees();
     let s = unit_cube_scene();
     let (eye, target) = (DVec3::new(2., 1.5, 4.), DVec3::new(0.1, 0.2, 0.3));
     for cam in [
         Camera::orthographic(eye, target, DVec3::Y, 1e-12, 0.1, 100.0),
         Camera::orthographic(eye, target, DVec3::Y, 1e-13, 0.1, 100.0),
-        Camera::perspective(eye, target, DVec3::Y, Camera::MIN_FOV_DEGREES, 0.1, 100.0),
+        Camera::perspective(eye, target, DVec3::Y, narrowest, 0.1, 100.0),
     ] {
         let vp = Viewport::new(24, 16).unwrap();
         let view = prepare(&s, &cam, vp, &PrepareOptions::default()).unwrap();

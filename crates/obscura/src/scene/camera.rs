@@ -93,19 +93,18 @@ impl Camera {
         }
     }
 
-    /// The smallest perspective field of view accepted, in degrees. A direction from
-    /// the eye is resolved to about `f64::EPSILON` radians at best (the rounding of
-    /// `point - eye`), whatever the scene; at this field of view a pixel of the tallest
-    /// image ([`Viewport::MAX_SIDE`] rows) still spans about 4,800 times that. Narrower
-    /// views (tried down to `1e-14` degrees) made the algorithms that work in eye
-    /// space disagree with the z-buffer: polygons a few units in the last place wide,
-    /// with no reliable plane.
-    pub const MIN_FOV_DEGREES: f64 = 1e-6;
+    /// The smallest angle a pixel of a perspective view may span, in radians
+    /// (`64 f64::EPSILON`, about `1.4e-14`; see [`Camera::validate_for`]). A direction
+    /// from the eye is resolved to about `f64::EPSILON` radians at best (the rounding of
+    /// `point - eye`), whatever the scene. Views whose pixels span about that (a field
+    /// of view of `3e-13` degrees over 64 rows) made ray casting and depth sort
+    /// disagree with the z-buffer; with pixels of `1.2 eps` (`1e-12` degrees over 64
+    /// rows) they still agreed.
+    pub const MIN_PIXEL_ANGLE: f64 = 64.0 * f64::EPSILON;
 
     /// Checks that the camera can produce an image: finite eye, target and up, a view
-    /// direction, an up vector not along it, `near < far`, a field of view in
-    /// [[`Camera::MIN_FOV_DEGREES`], 180) degrees and `near > 0` (perspective) or a
-    /// positive height (orthographic). Every
+    /// direction, an up vector not along it, `near < far`, a field of view in (0, 180)
+    /// degrees and `near > 0` (perspective) or a positive height (orthographic). Every
     /// position, distance and height must lie within [`super::MAX_COORDINATE`], and a
     /// perspective camera's `far / near` at most that too: its depth keys `near /
     /// depth` are stored in single precision.
@@ -166,14 +165,6 @@ impl Camera {
                         "field of view {fov_y_degrees} degrees is not in (0, 180)"
                     ));
                 }
-                if fov_y_degrees < Self::MIN_FOV_DEGREES {
-                    return bad(format!(
-                        "field of view {fov_y_degrees:e} degrees is below the smallest \
-                         accepted, {:e}: directions from the eye are not resolved that \
-                         finely in double precision",
-                        Self::MIN_FOV_DEGREES
-                    ));
-                }
                 if !(self.near > 0.0) {
                     return bad(format!(
                         "a perspective camera needs near > 0 (near {})",
@@ -200,6 +191,34 @@ impl Camera {
                          accepted, {limit:e}"
                     ));
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Camera::validate`], and for a perspective camera, that a pixel of `viewport`
+    /// spans at least [`Camera::MIN_PIXEL_ANGLE`] (a field of view of at least about
+    /// `5e-11` degrees for 64 rows, `8e-9` for 10,000).
+    ///
+    /// ```
+    /// use obscura::{Camera, Viewport};
+    /// use glam::DVec3;
+    /// let narrow = Camera::perspective(DVec3::Z * 5.0, DVec3::ZERO, DVec3::Y, 1e-13, 1.0, 10.0);
+    /// assert!(narrow.validate().is_ok());
+    /// assert!(narrow.validate_for(Viewport::new(64, 64).unwrap()).is_err());
+    /// ```
+    pub fn validate_for(&self, viewport: Viewport) -> Result<()> {
+        self.validate()?;
+        if let Projection::Perspective { fov_y_degrees } = self.projection {
+            let pixel = fov_y_degrees.to_radians() / f64::from(viewport.height.max(1));
+            if pixel < Self::MIN_PIXEL_ANGLE {
+                return Err(Error::InvalidCamera(format!(
+                    "field of view {fov_y_degrees:e} degrees over {} rows: a pixel spans \
+                     {pixel:.1e} radians, below the smallest accepted, {:.1e} (directions \
+                     from the eye are not resolved that finely in double precision)",
+                    viewport.height,
+                    Self::MIN_PIXEL_ANGLE
+                )));
             }
         }
         Ok(())
