@@ -905,48 +905,20 @@ mod tests {
 
     #[test]
     fn repeated_points_and_spikes() {
-        // An L with a vertex repeated three times, with its first vertex repeated at the
-        // end, and with a zero-width spike out of its reflex corner.
+        // An L (reflex corner (1, 1) at index 3) with that vertex repeated three times,
+        // with its first vertex repeated at the end, and with a zero-width spike out of
+        // its reflex corner, outwards and inwards.
+        let l = [(0., 0.), (2., 0.), (2., 1.), (1., 1.), (1., 2.), (0., 2.)];
+        let with = |at: usize, extra: &[(f64, f64)]| {
+            let mut v = l.to_vec();
+            v.splice(at..at, extra.iter().copied());
+            v
+        };
         let polys = [
-            vec![
-                (0., 0.),
-                (2., 0.),
-                (2., 1.),
-                (1., 1.),
-                (1., 1.),
-                (1., 1.),
-                (1., 2.),
-                (0., 2.),
-            ],
-            vec![
-                (0., 0.),
-                (2., 0.),
-                (2., 1.),
-                (1., 1.),
-                (1., 2.),
-                (0., 2.),
-                (0., 0.),
-            ],
-            vec![
-                (0., 0.),
-                (2., 0.),
-                (2., 1.),
-                (1., 1.),
-                (3., 3.),
-                (1., 1.),
-                (1., 2.),
-                (0., 2.),
-            ],
-            vec![
-                (0., 0.),
-                (2., 0.),
-                (2., 1.),
-                (1., 1.),
-                (0.5, 0.5),
-                (1., 1.),
-                (1., 2.),
-                (0., 2.),
-            ],
+            with(4, &[(1., 1.), (1., 1.)]),
+            with(6, &[(0., 0.)]),
+            with(4, &[(3., 3.), (1., 1.)]),
+            with(4, &[(0.5, 0.5), (1., 1.)]),
         ];
         for poly in polys {
             let points = pts(&poly);
