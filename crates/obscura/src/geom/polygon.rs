@@ -207,11 +207,17 @@ const NONE: usize = usize::MAX;
 /// gives up and fans what is left. Typical simple polygons need about 10 to 130 units per
 /// vertex (stars, combs and spirals of 20,000 vertices); the quadratic term lets the
 /// known slow shapes (see [`triangulate`]) finish correctly: a 100,000-vertex bar of
-/// teeth needs 1.6e9. The bound stops hostile input (heavily self-intersecting polygons
-/// whose every candidate ear is blocked) from taking cubic time or worse.
+/// teeth needs 1.6e9. The quadratic term is capped at [`EAR_WORK_QUADRATIC_CAP`]. The
+/// bound stops hostile input (heavily self-intersecting polygons whose every candidate
+/// ear is blocked, or a million-vertex comb met from the wrong end) from taking cubic or
+/// unbounded quadratic time.
 const EAR_WORK_PER_VERTEX: usize = 1000;
 /// See [`EAR_WORK_PER_VERTEX`].
 const EAR_WORK_BASE: usize = 1 << 20;
+/// The most the quadratic term of the work bound grants (about 13 s at the 6 ns per
+/// unit measured on the 100,000-vertex comb): without it, a face of a million vertices
+/// in a file of 8 MB could ask for 2.5e11 units, half an hour.
+const EAR_WORK_QUADRATIC_CAP: usize = 1 << 31;
 
 /// What a vertex's corner (with its current neighbours) is to ear clipping.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -578,7 +584,7 @@ impl EarClipper {
         let n = self.p.len();
         let budget = EAR_WORK_BASE
             .saturating_add(EAR_WORK_PER_VERTEX.saturating_mul(n))
-            .saturating_add(n.saturating_mul(n) / 4);
+            .saturating_add((n.saturating_mul(n) / 4).min(EAR_WORK_QUADRATIC_CAP));
         let mut cur = 0;
         // Where a turn of the ring without an ear ends.
         let mut stop = cur;
