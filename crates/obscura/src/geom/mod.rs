@@ -16,7 +16,8 @@ pub use kdop::{Kdop, KdopKind, RaySlabs};
 pub use obb::Obb;
 pub use plane::{Plane, PlaneSide};
 pub use polygon::{
-    is_convex, max_plane_deviation, newell_normal, polygon_area, polygon_centroid, triangulate,
+    Triangulation, is_convex, max_plane_deviation, newell_normal, polygon_area, polygon_centroid,
+    triangulate, triangulate_reporting,
 };
 pub use sphere::Sphere;
 

@@ -134,12 +134,33 @@ pub fn is_convex(points: &[DVec3]) -> bool {
 /// ```
 #[must_use]
 pub fn triangulate(points: &[DVec3]) -> Vec<[u32; 3]> {
+    triangulate_reporting(points).triangles
+}
+
+/// A triangulation, and whether it is only partly ear clipping.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Triangulation {
+    /// The triangles, as [`triangulate`] returns them.
+    pub triangles: Vec<[u32; 3]>,
+    /// The work bound ran out (see [`triangulate`]) and the rest of the polygon was
+    /// fanned: if it was not convex, some triangles overlap or lie outside it.
+    pub fanned: bool,
+}
+
+/// [`triangulate`], also telling whether the work bound cut it short, so that callers
+/// can warn about the fanned rest.
+#[must_use]
+pub fn triangulate_reporting(points: &[DVec3]) -> Triangulation {
+    let triangles = |triangles| Triangulation {
+        triangles,
+        fanned: false,
+    };
     let count = points.len();
     if count < 3 {
-        return Vec::new();
+        return triangles(Vec::new());
     }
     if count == 3 {
-        return vec![[0, 1, 2]];
+        return triangles(vec![[0, 1, 2]]);
     }
     let fan = || {
         (1..count as u32 - 1)
@@ -148,13 +169,21 @@ pub fn triangulate(points: &[DVec3]) -> Vec<[u32; 3]> {
     };
     let n = newell_normal(points);
     if n == DVec3::ZERO || !n.is_finite() {
-        return fan();
+        return triangles(fan());
     }
     let p = project(points, n);
     if !p.iter().all(|q| q.is_finite()) {
-        return fan();
+        return triangles(fan());
     }
-    EarClipper::new(p).run()
+    let budget = ear_work_budget(count);
+    EarClipper::new(p).run(budget)
+}
+
+/// The work [`triangulate`] may spend on `n` vertices (see [`EAR_WORK_PER_VERTEX`]).
+fn ear_work_budget(n: usize) -> usize {
+    EAR_WORK_BASE
+        .saturating_add(EAR_WORK_PER_VERTEX.saturating_mul(n))
+        .saturating_add((n.saturating_mul(n) / 4).min(EAR_WORK_QUADRATIC_CAP))
 }
 
 /// Twice the signed area of the triangle `abc`: positive when it turns counter-clockwise.
@@ -580,11 +609,8 @@ impl EarClipper {
     }
 
     /// Clips ears until three vertices remain, then emits the last triangle.
-    fn run(mut self) -> Vec<[u32; 3]> {
-        let n = self.p.len();
-        let budget = EAR_WORK_BASE
-            .saturating_add(EAR_WORK_PER_VERTEX.saturating_mul(n))
-            .saturating_add((n.saturating_mul(n) / 4).min(EAR_WORK_QUADRATIC_CAP));
+    /// Past `budget` units of work, the rest is fanned.
+    fn run(mut self, budget: usize) -> Triangulation {
         let mut cur = 0;
         // Where a turn of the ring without an ear ends.
         let mut stop = cur;
@@ -597,7 +623,10 @@ impl EarClipper {
                     self.out.push([first as u32, v as u32, self.next[v] as u32]);
                     v = self.next[v];
                 }
-                return self.out;
+                return Triangulation {
+                    triangles: self.out,
+                    fanned: true,
+                };
             }
             if self.is_ear(cur, false) {
                 // Resume at the ear's predecessor, then its successor: only their corners
@@ -616,7 +645,10 @@ impl EarClipper {
         }
         self.out
             .push([self.prev[cur] as u32, cur as u32, self.next[cur] as u32]);
-        self.out
+        Triangulation {
+            triangles: self.out,
+            fanned: false,
+        }
     }
 }
 
@@ -907,6 +939,28 @@ mod tests {
                 "{poly:?}: {tris:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_spent_work_bound_fans_the_rest_and_says_so() {
+        // A comb of 40 teeth: 40 units of work are far too few.
+        let teeth: Vec<_> = (0..40).map(|_| (0.5, 0.5, 3.0)).collect();
+        let (outline, is_inside) = comb(&teeth);
+        let points = pts(&outline);
+        let n = points.len();
+        let p = project(&points, newell_normal(&points));
+        let short = EarClipper::new(p.clone()).run(40);
+        assert!(short.fanned);
+        assert_eq!(short.triangles.len(), n - 2);
+        assert!(
+            check_triangulation(&points, &short.triangles, Some(&is_inside)).is_err(),
+            "a fanned comb has triangles outside it"
+        );
+        // With the real bound: complete and correct.
+        let full = triangulate_reporting(&points);
+        assert!(!full.fanned);
+        check_triangulation(&points, &full.triangles, Some(&is_inside)).unwrap();
+        assert_eq!(EarClipper::new(p).run(ear_work_budget(n)), full);
     }
 
     #[test]

@@ -414,7 +414,17 @@ impl MeshBuilder {
                 } else {
                     self.report.nonplanar_faces += 1;
                 }
-                let tris = geom::triangulate(&self.points);
+                let geom::Triangulation {
+                    triangles: tris,
+                    fanned,
+                } = geom::triangulate_reporting(&self.points);
+                if fanned {
+                    self.report.messages.push(format!(
+                        "face {face}: {} vertices, too many ear tests: its last part was \
+                         fanned, and its triangles may overlap or leave it",
+                        self.points.len()
+                    ));
+                }
                 let mut kept = 0;
                 for t in &tris {
                     let tri = [
