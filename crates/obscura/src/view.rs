@@ -634,7 +634,7 @@ mod reference {
         viewport: Viewport,
         options: &PrepareOptions,
     ) -> Result<PreparedView<'s>> {
-        camera.validate()?;
+        camera.validate_for(viewport)?;
         let t = ViewTransform::new(camera, viewport);
         let mut stats = PipelineStats::default();
 

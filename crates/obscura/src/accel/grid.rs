@@ -425,7 +425,7 @@ impl UniformGrid {
         }
         let (o, d) = (ctx.ray.origin, ctx.ray.direction);
         // The ray's rounding (see "Rounding" in the module doc).
-        let tau = ROUNDING * (o.abs().max_element() + self.magnitude);
+        let tau = self.rounding(o);
         if !(tau <= self.max_tau) {
             counters.far_rays += 1;
             return self.every_triangle::<O>(triangles, ctx, t_max, counters);
@@ -559,14 +559,7 @@ impl UniformGrid {
         t_max: f64,
         counters: &mut GridCounters,
     ) -> GridHit {
-        let mut hit = ClosestHit::new(t_max);
-        for (tri, &poly) in triangles
-            .vertices()
-            .iter()
-            .zip(triangles.triangle_polygons())
-        {
-            counters.triangles += u64::from(ctx.test::<O>(tri, poly, t_max, &mut hit));
-        }
+        let hit = ctx.closest_of_all::<O>(triangles, t_max, &mut counters.triangles);
         GridHit { hit, cell: None }
     }
 

@@ -651,6 +651,26 @@ impl HitContext<'_> {
         }
         true
     }
+
+    /// The nearest hit among all of `triangles` up to `t_max` (brute force), adding the
+    /// exact tests made to `tests`.
+    #[inline(always)]
+    pub fn closest_of_all<O: AxisOrder>(
+        &self,
+        triangles: &SceneTriangles,
+        t_max: f64,
+        tests: &mut u64,
+    ) -> ClosestHit {
+        let mut closest = ClosestHit::new(t_max);
+        for (tri, &poly) in triangles
+            .vertices()
+            .iter()
+            .zip(triangles.triangle_polygons())
+        {
+            *tests += u64::from(self.test::<O>(tri, poly, t_max, &mut closest));
+        }
+        closest
+    }
 }
 
 #[cfg(test)]

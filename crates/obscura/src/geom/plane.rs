@@ -48,8 +48,8 @@ impl Plane {
     /// Returns `None` for fewer than three points or a polygon of (numerically) zero
     /// area: twice its area (`|n|`) at most `1e-24 s^2`, `s` the largest absolute
     /// coordinate. A polygon so small that this floor is below the rounding of its own
-    /// vertices (smaller than about `1e-10 s`, as every polygon of a view with a field
-    /// of view of `1e-12` degrees is) is judged against that rounding instead: it
+    /// vertices (smaller than about `1e-10 s`, as every eye-space face of an
+    /// orthographic window `1e-12` high is) is judged against that rounding instead: it
     /// keeps its plane while `|n|` exceeds `8 n_v eps s e` (`n_v` vertices, `e` their
     /// largest coordinate difference from the first): to first order, the most that
     /// rounding coordinates of magnitude `s` (by up to `eps s / 2` each) changes the
@@ -74,13 +74,15 @@ impl Plane {
             .iter()
             .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
         // Twice the area is |n|: refuse areas below 1e-24 of the coordinate scale
-        // squared, or, for polygons tiny beside their coordinates, below what rounding
-        // can make of them.
-        let extent = points
-            .iter()
-            .fold(0.0f64, |m, &p| m.max((p - points[0]).abs().max_element()));
-        let noise = 8.0 * points.len() as f64 * f64::EPSILON * scale * extent;
-        if !(len > (1e-24 * scale * scale).min(noise)) || !len.is_finite() {
+        // squared, unless the polygon is so small beside its coordinates that what
+        // rounding can make of it is below that (computed only then: rare).
+        let above_rounding = || {
+            let extent = points
+                .iter()
+                .fold(0.0f64, |m, &p| m.max((p - points[0]).abs().max_element()));
+            len > 8.0 * points.len() as f64 * f64::EPSILON * scale * extent
+        };
+        if !len.is_finite() || !(len > 1e-24 * scale * scale || above_rounding()) {
             return None;
         }
         let normal = n / len;
@@ -217,8 +219,8 @@ mod tests {
 
     #[test]
     fn newell_keeps_the_plane_of_a_tiny_polygon_far_from_the_origin() {
-        // A square of side 1e-13, tilted 45 degrees about x, around z = -1.7 (the
-        // eye-space face of a cube seen with a field of view of 1e-12 degrees): its
+        // A square of side 1e-13, tilted 45 degrees about x, around z = -1.7 (an
+        // eye-space face of a cube seen through an orthographic window 1e-12 high): its
         // area is far below 1e-24 of its coordinates squared, but far above what
         // rounding them can make.
         let (c, s) = (0.5f64.sqrt(), 1e-13);

@@ -151,16 +151,16 @@ pub struct Triangulation {
 /// can warn about the fanned rest.
 #[must_use]
 pub fn triangulate_reporting(points: &[DVec3]) -> Triangulation {
-    let triangles = |triangles| Triangulation {
+    let complete = |triangles| Triangulation {
         triangles,
         fanned: false,
     };
     let count = points.len();
     if count < 3 {
-        return triangles(Vec::new());
+        return complete(Vec::new());
     }
     if count == 3 {
-        return triangles(vec![[0, 1, 2]]);
+        return complete(vec![[0, 1, 2]]);
     }
     let fan = || {
         (1..count as u32 - 1)
@@ -169,11 +169,11 @@ pub fn triangulate_reporting(points: &[DVec3]) -> Triangulation {
     };
     let n = newell_normal(points);
     if n == DVec3::ZERO || !n.is_finite() {
-        return triangles(fan());
+        return complete(fan());
     }
     let p = project(points, n);
     if !p.iter().all(|q| q.is_finite()) {
-        return triangles(fan());
+        return complete(fan());
     }
     let budget = ear_work_budget(count);
     EarClipper::new(p).run(budget)
@@ -949,7 +949,7 @@ mod tests {
         let points = pts(&outline);
         let n = points.len();
         let p = project(&points, newell_normal(&points));
-        let short = EarClipper::new(p.clone()).run(40);
+        let short = EarClipper::new(p).run(40);
         assert!(short.fanned);
         assert_eq!(short.triangles.len(), n - 2);
         assert!(
@@ -960,7 +960,6 @@ mod tests {
         let full = triangulate_reporting(&points);
         assert!(!full.fanned);
         check_triangulation(&points, &full.triangles, Some(&is_inside)).unwrap();
-        assert_eq!(EarClipper::new(p).run(ear_work_budget(n)), full);
     }
 
     #[test]

@@ -164,17 +164,11 @@ pub fn render_brute_force(
     impl WithAxisOrder for Run<'_, '_> {
         type Output = ClosestHit;
         fn run<O: AxisOrder>(self) -> ClosestHit {
-            let mut closest = ClosestHit::new(self.far);
-            for (tri, &poly) in self
-                .triangles
-                .vertices()
-                .iter()
-                .zip(self.triangles.triangle_polygons())
-            {
-                self.counters.triangle_tests +=
-                    u64::from(self.ctx.test::<O>(tri, poly, self.far, &mut closest));
-            }
-            closest
+            self.ctx.closest_of_all::<O>(
+                self.triangles,
+                self.far,
+                &mut self.counters.triangle_tests,
+            )
         }
     }
     let setup = Setup::new(view, triangles);
