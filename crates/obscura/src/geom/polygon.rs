@@ -249,7 +249,7 @@ const EAR_WORK_BASE: usize = 1 << 20;
 const EAR_WORK_QUADRATIC_CAP: usize = 1 << 31;
 
 /// What a vertex's corner (with its current neighbours) is to ear clipping.
-#[derive(Clone, Copy, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Corner {
     /// Turns strictly counter-clockwise: a candidate ear.
     Convex,
@@ -1030,6 +1030,41 @@ mod tests {
             (0., 10.),
         ];
         check(&pts(&poly)).unwrap();
+    }
+
+    #[test]
+    fn a_vertex_at_an_ear_corner_does_not_block_it() {
+        // A 10 x 10 square with a 2 x 2 hole joined by a cut from (3, 0) to the hole's
+        // corner (4, 6). The cut's upper end is two vertices: 2, a reflex corner (it
+        // blocks ears), and 6, a sharp convex one. The corner at 7, the cut's lower end
+        // on the way back, is an ear: its triangle (4, 6), (3, 0), (3.5, 0) holds no
+        // vertex but vertex 2, at its first corner, which must not count.
+        let points = pts(&[
+            (0., 0.),
+            (3., 0.),
+            (4., 6.),
+            (6., 6.),
+            (6., 4.),
+            (4., 4.),
+            (4., 6.),
+            (3., 0.),
+            (3.5, 0.),
+            (10., 0.),
+            (10., 10.),
+            (0., 10.),
+        ]);
+        let mut clipper = EarClipper::new(project(&points, newell_normal(&points)));
+        assert_eq!(clipper.corner[2], Corner::Blocking);
+        assert_eq!(clipper.corner[6], Corner::Convex);
+        assert!(clipper.is_ear(7, false));
+        // A blocking vertex elsewhere in the triangle does block it: the hole's corner
+        // (4, 4) moved to (3.4, 1), still reflex.
+        let mut inside = points.clone();
+        inside[5] = DVec3::new(3.4, 1.0, 0.0);
+        let mut clipper = EarClipper::new(project(&inside, newell_normal(&inside)));
+        assert_eq!(clipper.corner[5], Corner::Blocking);
+        assert!(!clipper.is_ear(7, false));
+        check(&points).unwrap();
     }
 
     #[test]
