@@ -15,6 +15,8 @@ pub use aabb::Aabb;
 pub use kdop::{Kdop, KdopKind, RaySlabs};
 pub use obb::Obb;
 pub use plane::{Plane, PlaneSide};
+#[cfg(test)]
+pub(crate) use polygon::triangulate_within;
 pub use polygon::{
     Triangulation, is_convex, max_plane_deviation, newell_normal, polygon_area, polygon_centroid,
     triangulate, triangulate_reporting,

@@ -151,6 +151,12 @@ pub struct Triangulation {
 /// can warn about the fanned rest.
 #[must_use]
 pub fn triangulate_reporting(points: &[DVec3]) -> Triangulation {
+    triangulate_within(points, ear_work_budget(points.len()))
+}
+
+/// [`triangulate_reporting`] with a given work bound instead of [`triangulate`]'s
+/// (callers' tests of the fanned case use a tiny one).
+pub(crate) fn triangulate_within(points: &[DVec3], budget: usize) -> Triangulation {
     let complete = |triangles| Triangulation {
         triangles,
         fanned: false,
@@ -175,7 +181,6 @@ pub fn triangulate_reporting(points: &[DVec3]) -> Triangulation {
     if !p.iter().all(|q| q.is_finite()) {
         return complete(fan());
     }
-    let budget = ear_work_budget(count);
     EarClipper::new(p).run(budget)
 }
 

@@ -266,6 +266,10 @@ pub struct MeshBuilder {
     report: LoadReport,
     scratch: Vec<u32>,
     points: Vec<DVec3>,
+    /// A work bound for triangulating faces instead of [`geom::triangulate`]'s (tests
+    /// of the fanned case).
+    #[cfg(test)]
+    ear_work_budget: Option<usize>,
 }
 
 impl MeshBuilder {
@@ -417,7 +421,7 @@ impl MeshBuilder {
                 let geom::Triangulation {
                     triangles: tris,
                     fanned,
-                } = geom::triangulate_reporting(&self.points);
+                } = self.triangulate();
                 if fanned {
                     self.report.messages.push(format!(
                         "face {face}: {} vertices, too many ear tests: its last part was \
@@ -445,6 +449,15 @@ impl MeshBuilder {
         };
         self.scratch = scratch;
         outcome
+    }
+
+    /// The triangulation of the face in `points` (see [`geom::triangulate_reporting`]).
+    fn triangulate(&self) -> geom::Triangulation {
+        #[cfg(test)]
+        if let Some(budget) = self.ear_work_budget {
+            return geom::triangulate_within(&self.points, budget);
+        }
+        geom::triangulate_reporting(&self.points)
     }
 
     fn emit(&mut self, indices: &[u32], face: u32) {
@@ -477,6 +490,38 @@ mod tests {
             b.push_position(DVec3::new(x, y, z));
         }
         b
+    }
+
+    #[test]
+    fn a_face_whose_triangulation_ran_out_of_work_is_named() {
+        // A comb of 4 teeth (outline counter-clockwise): concave, triangulated.
+        let mut outline = vec![(0., 0., 0.), (8., 0., 0.), (8., 1., 0.)];
+        for t in (0..4).rev() {
+            let x = f64::from(t) * 2.0;
+            outline.extend([(x + 1.5, 1., 0.), (x + 1.5, 3., 0.), (x + 0.5, 3., 0.)]);
+            outline.push((x + 0.5, 1., 0.));
+        }
+        outline.push((0., 1., 0.));
+        let face: Vec<u32> = (0..outline.len() as u32).collect();
+        let n = face.len();
+        // The normal bound: ears to the end, no message.
+        let mut b = builder(&outline);
+        assert_eq!(
+            b.push_face(&face, None),
+            Ok(FaceOutcome::Triangulated(n - 2))
+        );
+        assert!(b.report.messages.is_empty(), "{:?}", b.report.messages);
+        // A bound of a few units: the rest is fanned, and the report names the face.
+        let mut b = builder(&outline);
+        b.ear_work_budget = Some(3);
+        b.push_face(&face, None).unwrap();
+        b.push_face(&face, None).unwrap();
+        assert_eq!(b.report.messages.len(), 2, "{:?}", b.report.messages);
+        assert!(
+            b.report.messages[1].starts_with(&format!("face 1: {n} vertices, too many ear tests")),
+            "{}",
+            b.report.messages[1]
+        );
     }
 
     #[test]
