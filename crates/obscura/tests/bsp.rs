@@ -55,9 +55,11 @@ fn check_order_invariants(tree: &BspTree, vp: Viewpoint) -> usize {
         range[i] = r;
     }
     let mut checked = 0;
+    // Node planes are in the tree's frame.
+    let local = vp.relative_to(tree.origin());
     for (i, own) in own.iter().enumerate() {
         let node = tree.node(i as u32);
-        let side = vp.side(&node.plane);
+        let side = local.side(&node.plane);
         if side == 0.0 {
             continue;
         }
@@ -106,24 +108,26 @@ fn traversal_order_holds_from_both_sides_of_every_node() {
             viewpoints.push(Viewpoint::Direction(p - scene.bounds().center()));
         }
         // Just in front of and just behind node planes, at a point of the node's
-        // polygon (or of the plane, for an axis-aligned node without polygons).
+        // polygon (or of the plane, for an axis-aligned node without polygons). The
+        // planes are in the tree's frame, world minus its origin.
+        let origin = tree.origin();
         let step = (tree.node_count() / 40).max(1);
         for i in (0..tree.node_count()).step_by(step) {
             let node = tree.node(i as u32);
             let c = match tree.node_fragments(i as u32).first() {
                 Some(&f) => {
                     let pts = tree.fragment_points(f);
-                    pts.iter().sum::<DVec3>() / pts.len() as f64
+                    pts.iter().sum::<DVec3>() / pts.len() as f64 - origin
                 }
                 None => {
-                    let o = scene.bounds().center();
+                    let o = scene.bounds().center() - origin;
                     o - node.plane.normal * node.plane.signed_distance(o)
                 }
             };
             let delta = node.plane.normal * (1e-6 * scale);
             for p in [c + delta, c - delta] {
-                let vp = Viewpoint::Point(p);
-                assert!(vp.side(&node.plane) != 0.0);
+                let vp = Viewpoint::Point(p + origin);
+                assert!(vp.relative_to(origin).side(&node.plane) != 0.0);
                 viewpoints.push(vp);
             }
         }
@@ -153,7 +157,7 @@ fn fragments_lie_on_their_side_of_every_ancestor_and_keep_the_area() {
             for &(a, front) in &above {
                 let anc = tree.node(a as u32);
                 for p in &pts {
-                    let d = anc.plane.signed_distance(*p);
+                    let d = anc.plane.signed_distance(*p - tree.origin());
                     assert!(if front { d >= -anc.eps } else { d <= anc.eps }, "{d}");
                 }
             }
@@ -184,6 +188,71 @@ fn frames_equal_the_zbuffer_on_the_demo_scene() {
     let vp = Viewport::new(160, 120).unwrap();
     let v = view(&scene, &scene.default_camera(vp.aspect()), 160, 120);
     both_traversals(&v, 0.999, "demo:default");
+}
+
+/// The demo scene shrunk and moved far from the world's origin gives the frame it gives
+/// at the origin: the tree works relative to the scene's centre. (Its tolerance used to
+/// be 1e-9 of the largest world coordinate: 1 cm at x = 1e7, so the faces of 2 cm
+/// solids all counted as lying on every plane, and a sphere was painted in front of
+/// the box that hides it.) Also a single triangle 1e-6 across at 2.8e7, which was not
+/// drawn at all.
+#[test]
+fn small_scenes_far_from_the_world_origin() {
+    let base = demo::default_scene();
+    let vp = Viewport::new(96, 64).unwrap();
+    let cam = base.default_camera(vp.aspect());
+    for (offset, size) in [
+        (DVec3::new(1e7, 0.0, 0.0), 1e-2),
+        (DVec3::new(1e5, -1e5, 1e5), 1e-4),
+        (DVec3::new(-1.0, -2.8e7, -9.0), 1e-3),
+    ] {
+        let t = DMat4::from_translation(offset) * DMat4::from_scale(DVec3::splat(size));
+        let mut scene = Scene::new();
+        for o in base.objects() {
+            scene
+                .add(ObjectDesc {
+                    name: o.name.clone(),
+                    mesh: o.mesh.clone(),
+                    transform: t * o.transform,
+                    color: o.color,
+                    closed: Some(o.closed),
+                    convex: Some(o.convex),
+                })
+                .unwrap();
+        }
+        let mut c = cam;
+        (c.eye, c.target) = (t.transform_point3(cam.eye), t.transform_point3(cam.target));
+        (c.near, c.far) = (cam.near * size, cam.far * size);
+        let v = view(&scene, &c, 96, 64);
+        let label = format!("demo scene x {size} at {offset}");
+        let (frame, _) = bsp::render(&v, &options(BspTraversal::FrontToBack)).unwrap();
+        assert!(
+            frame.ids.iter().filter(|&&id| id != BACKGROUND).count() > 96 * 64 / 4,
+            "{label}: the view shows the scene"
+        );
+        both_traversals(&v, 0.999, &label);
+    }
+    // One triangle about 1e-6 across, seen from 2.5e-6 away through a 0.01 degree lens.
+    let pts = [
+        DVec3::new(-1.0881345882763804, -28445167.884648286, -9.053658067727412),
+        DVec3::new(-1.0881349587793903, -28445167.884647336, -9.053658071095338),
+        DVec3::new(-1.088134970934279, -28445167.884647254, -9.053658061236582),
+    ];
+    let mut scene = Scene::new();
+    scene.add(polygon_object("far triangle", &pts)).unwrap();
+    let (eye, target) = (
+        DVec3::new(-1.0881370947148006, -28445167.88464797, -9.053658388443672),
+        DVec3::new(-1.0881346323800591, -28445167.884647682, -9.053658042449834),
+    );
+    let d = eye.distance(target);
+    let c = Camera::perspective(eye, target, DVec3::Z, 0.01, d / 100.0, d * 100.0);
+    let v = view(&scene, &c, 64, 48);
+    let (z, _) = obscura::surface::zbuffer::render(&v, &RenderOptions::default()).unwrap();
+    assert!(
+        z.ids.iter().all(|&id| id == 0),
+        "the triangle fills the view"
+    );
+    both_traversals(&v, 1.0, "far triangle");
 }
 
 #[test]

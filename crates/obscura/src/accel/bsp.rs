@@ -39,9 +39,15 @@
 //!   balanced tree, O(c P^2) at worst (seed: O(P^2)); a traversal is O(nodes +
 //!   fragments) (seed: `DisplayBSP` is O(P)). Both use explicit stacks, so depth is
 //!   not limited by the thread's stack.
-//! - Tolerance: a vertex within `tolerance * scale` (scale: the largest absolute
-//!   world coordinate) of a plane, plus the splitter's own deviation from its plane
-//!   (non-planar quads), counts as on it.
+//! - Frame: the tree works in world coordinates minus an origin, the centre of the
+//!   scene's box ([`BspTree::origin`]): planes and distances are computed there, so
+//!   that a small scene far from the world's origin (a part at x = 1e7) keeps the
+//!   precision of its own size. Node and fragment planes are in that frame.
+//! - Tolerance: a vertex within `tolerance * scale` of a plane (scale: the largest
+//!   coordinate in the tree's frame, about half the scene's size), or within the
+//!   rounding of the world coordinates (`16 eps` of the origin's largest coordinate)
+//!   if that is larger, plus the splitter's own deviation from its plane (non-planar
+//!   quads), counts as on it.
 //! - Limitations: static scenes only (seed: "suitable for static scenes, not dynamic
 //!   ones"); random or interpenetrating geometry can multiply the fragment count.
 
@@ -107,8 +113,8 @@ pub struct BspOptions {
     pub traversal: BspTraversal,
     /// Seed of the candidate sampling (the same seed gives the same tree).
     pub seed: u64,
-    /// Distance below which a point counts as on a plane, relative to the largest
-    /// absolute world coordinate of the scene.
+    /// Distance below which a point counts as on a plane, relative to the scene's
+    /// half size (the largest coordinate in the tree's frame, see [`BspTree::origin`]).
     pub tolerance: f64,
     /// Whether an axis-aligned plane through the median of the polygons' centres is a
     /// candidate too (for sets of at least 64 polygons). Without it, a tree of convex
@@ -222,6 +228,16 @@ pub enum Viewpoint {
 }
 
 impl Viewpoint {
+    /// The same viewpoint in a frame whose origin is the world point `origin` (a
+    /// [`BspTree`]'s, see [`BspTree::origin`]): a point moves, a direction does not.
+    #[must_use]
+    pub fn relative_to(self, origin: DVec3) -> Self {
+        match self {
+            Viewpoint::Point(p) => Viewpoint::Point(p - origin),
+            Viewpoint::Direction(d) => Viewpoint::Direction(d),
+        }
+    }
+
     /// The viewpoint of a camera.
     #[must_use]
     pub fn of_camera(camera: &Camera) -> Self {
@@ -231,7 +247,8 @@ impl Viewpoint {
         }
     }
 
-    /// Positive when the viewer is on the plane's front side, negative behind, 0 on it.
+    /// Positive when the viewer is on the plane's front side, negative behind, 0 on it
+    /// (the viewpoint and the plane in the same frame: see [`Viewpoint::relative_to`]).
     #[inline]
     #[must_use]
     pub fn side(&self, plane: &Plane) -> f64 {
@@ -287,7 +304,8 @@ pub struct Fragment {
     /// Index of the mesh polygon (in the object's mesh) it comes from.
     pub polygon: u32,
     /// The plane of the original polygon (Newell, unit normal, front side
-    /// counter-clockwise), shared by all its pieces.
+    /// counter-clockwise), shared by all its pieces, in the tree's frame (see
+    /// [`BspTree::origin`]).
     pub plane: Plane,
     /// Largest distance of the original polygon's vertices from that plane.
     pub thickness: f64,
@@ -299,7 +317,8 @@ pub struct Fragment {
 /// meets no polygon), and two subtrees.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BspNode {
-    /// The splitting plane (that of the fragment chosen as splitter, or axis-aligned).
+    /// The splitting plane (that of the fragment chosen as splitter, or axis-aligned),
+    /// in the tree's frame (see [`BspTree::origin`]).
     pub plane: Plane,
     /// The subtree on the plane's positive side.
     pub front: Option<u32>,
@@ -350,6 +369,10 @@ pub struct BspTree {
     fragments: Vec<Fragment>,
     fragment_vertices: Vec<u32>,
     vertices: Vec<BspVertex>,
+    /// Per vertex, its position in the tree's frame (world minus `origin`).
+    local: Vec<DVec3>,
+    /// The world point at the origin of the tree's frame.
+    origin: DVec3,
     vertex_base: Vec<u32>,
     object_vertex_counts: Vec<u32>,
     face_count: u32,
@@ -402,6 +425,8 @@ impl BspTree {
             fragments: Vec::new(),
             fragment_vertices: Vec::new(),
             vertices: Vec::new(),
+            local: Vec::new(),
+            origin: DVec3::ZERO,
             vertex_base: Vec::with_capacity(scene.objects().len()),
             object_vertex_counts: Vec::with_capacity(scene.objects().len()),
             face_count: scene.face_count(),
@@ -412,25 +437,36 @@ impl BspTree {
             subtree_counts: Vec::new(),
             stats: BspBuildStats::default(),
         };
+        let bounds = scene
+            .objects()
+            .iter()
+            .fold(Aabb::EMPTY, |b, o| b.union(o.bounds));
+        if !bounds.is_empty() {
+            tree.origin = bounds.center();
+        }
         let mut scale = 0.0f64;
         for (k, o) in scene.objects().iter().enumerate() {
             tree.vertex_base.push(tree.vertices.len() as u32);
             tree.object_vertex_counts
                 .push(o.mesh.positions().len() as u32);
             for (i, &p) in o.mesh.positions().iter().enumerate() {
+                let world = o.transform.transform_point3(p);
+                let local = world - tree.origin;
+                scale = scale.max(local.abs().max_element());
                 tree.vertices.push(BspVertex {
-                    world: o.transform.transform_point3(p),
+                    world,
                     object: k as u32,
                     local: i as u32,
                 });
-            }
-            if !o.bounds.is_empty() {
-                scale = scale
-                    .max(o.bounds.min.abs().max_element())
-                    .max(o.bounds.max.abs().max_element());
+                tree.local.push(local);
             }
         }
-        tree.eps = options.tolerance * scale.max(f64::MIN_POSITIVE);
+        // World coordinates carry rounding of their own magnitude: points meant to be
+        // on one plane are that far off it, whatever the tree's frame.
+        let rounding = 16.0 * f64::EPSILON * tree.origin.abs().max_element();
+        tree.eps = (options.tolerance * scale)
+            .max(rounding)
+            .max(f64::MIN_POSITIVE);
         tree.slack = 1e-12 * scale.max(f64::MIN_POSITIVE);
         let mut points = Vec::new();
         for (k, o) in scene.objects().iter().enumerate() {
@@ -439,10 +475,7 @@ impl BspTree {
                 tree.stats.input_polygons += 1;
                 let idx = o.mesh.polygon(p);
                 points.clear();
-                points.extend(
-                    idx.iter()
-                        .map(|&i| tree.vertices[(base + i) as usize].world),
-                );
+                points.extend(idx.iter().map(|&i| tree.local[(base + i) as usize]));
                 let Some(plane) = Plane::newell(&points) else {
                     tree.stats.degenerate += 1;
                     continue;
@@ -644,7 +677,7 @@ impl BspTree {
     fn median_plane(&self, set: &[u32]) -> Option<Plane> {
         let first = |f: u32| {
             let v = self.fragment_vertices[self.fragments[f as usize].start as usize];
-            self.vertices[v as usize].world
+            self.local[v as usize]
         };
         let (lo, hi) = set
             .iter()
@@ -704,7 +737,7 @@ impl BspTree {
         let (mut front, mut back) = (false, false);
         for &v in self.fragment_indices(frag) {
             // The same expression as `split_polygon`, so both agree on every vertex.
-            let d = plane.evaluate(self.vertices[v as usize].world) / len;
+            let d = plane.evaluate(self.local[v as usize]) / len;
             front |= d > eps;
             back |= d < -eps;
         }
@@ -727,7 +760,7 @@ impl BspTree {
         let frag = self.fragments[f as usize];
         let idx: Vec<u32> = self.fragment_indices(&frag).to_vec();
         points.clear();
-        points.extend(idx.iter().map(|&v| self.vertices[v as usize].world));
+        points.extend(idx.iter().map(|&v| self.local[v as usize]));
         match split_polygon(points, plane, eps) {
             Split::Front | Split::Coplanar { .. } => (Some(f), None),
             Split::Back => (None, Some(f)),
@@ -759,10 +792,11 @@ impl BspTree {
                 Some(v) => v,
                 None => {
                     self.vertices.push(BspVertex {
-                        world: q,
+                        world: q + self.origin,
                         object: parent.object,
                         local: MADE_BY_SPLIT,
                     });
+                    self.local.push(q);
                     let v = (self.vertices.len() - 1) as u32;
                     made.push((q, v));
                     v
@@ -854,6 +888,16 @@ impl BspTree {
         self.vertex_base[k]
     }
 
+    /// The world point at the origin of the tree's frame (the centre of the scene's
+    /// box), in which node and fragment planes are expressed: a world point `p` is on
+    /// the front side of a node's plane when `plane.evaluate(p - origin) > 0`, and a
+    /// viewpoint is compared with them after [`Viewpoint::relative_to`]. Traversals
+    /// take world viewpoints and do that themselves.
+    #[must_use]
+    pub fn origin(&self) -> DVec3 {
+        self.origin
+    }
+
     /// The absolute tolerance of plane classification (before adding a splitter's
     /// thickness).
     #[must_use]
@@ -909,6 +953,7 @@ impl BspTree {
         let Some(root) = self.root() else {
             return true;
         };
+        let viewpoint = viewpoint.relative_to(self.origin);
         let mut stack = vec![Item::Node(root)];
         while let Some(item) = stack.pop() {
             match item {
