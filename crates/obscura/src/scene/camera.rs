@@ -338,11 +338,13 @@ impl Camera {
 
     /// Sets `near` and `far` to hold the whole box as seen along the view direction,
     /// with a margin: `far` 1 % past the farthest corner; `near` 1 % before the
-    /// nearest corner, but for a perspective camera at least `far / 10^4` (an eye
-    /// inside the box, or closer than that, keeps 10^4 : 1, which the `f32` depth keys
-    /// resolve); for an orthographic one it may be negative (planes behind the eye are
-    /// seen). Nothing changes when the box is empty or the camera has no view
-    /// direction (eye on the target, or not finite): [`Camera::validate`] reports that.
+    /// nearest corner, but for a perspective camera at least `far / 10^6` (an eye
+    /// inside the box, or that close to it: whatever lies nearer than a millionth of
+    /// the farthest corner's distance is cut away; the depth keys `near / depth` keep
+    /// their relative precision at any ratio); for
+    /// an orthographic one it may be negative (planes behind the eye are seen). Nothing
+    /// changes when the box is empty or the camera has no view direction (eye on the
+    /// target, or not finite): [`Camera::validate`] reports that.
     ///
     /// Used when a camera is moved without giving its planes (the CLI's `--eye`, a scene
     /// file's `[camera]` without `near`/`far`).
@@ -370,9 +372,14 @@ impl Camera {
             hi = hi.max(d);
         }
         let size = bounds.extent().length().max(1e-9);
-        let far = hi.max(size * 1e-3) * 1.01 + size * 1e-6;
+        // A box wholly behind the eye (or nearly) still gets a valid range.
+        let far = if hi > size * 1e-3 {
+            hi * 1.01 + size * 1e-6
+        } else {
+            size * 1e-3
+        };
         self.near = match self.projection {
-            Projection::Perspective { .. } => (lo * 0.99).max(far * 1e-4),
+            Projection::Perspective { .. } => (lo * 0.99).max(far * 1e-6),
             Projection::Orthographic { .. } => lo - size * 0.01,
         };
         self.far = far;
@@ -454,6 +461,37 @@ mod tests {
             1.0,
             10.0,
         )
+    }
+
+    #[test]
+    fn a_fitted_near_plane_keeps_what_is_near_an_eye_inside_the_box() {
+        // A ground 100 km across with a unit box at its centre, seen from 4 units away
+        // (the eye inside the scene's box): the near plane was far / 10^4, about 7,
+        // and the box vanished.
+        let scene = Aabb {
+            min: DVec3::new(-5e4, -0.01, -5e4),
+            max: DVec3::new(5e4, 1.0, 5e4),
+        };
+        let mut c = Camera::perspective(
+            DVec3::new(0.0, 1.0, 4.0),
+            DVec3::ZERO,
+            DVec3::Y,
+            60.0,
+            1.0,
+            2.0,
+        );
+        c.fit_depth_range(&scene);
+        let forward = (c.target - c.eye).normalize();
+        let farthest = scene
+            .corners()
+            .into_iter()
+            .map(|p| (p - c.eye).dot(forward))
+            .fold(f64::MIN, f64::max);
+        assert!(c.far > farthest && c.far < farthest * 1.02, "{}", c.far);
+        assert!(c.near <= c.far * 1e-6 * 1.000_001, "{} {}", c.near, c.far);
+        // The box's nearest point is about 3 units along the view axis.
+        assert!(c.near < 0.1, "{}", c.near);
+        c.validate().unwrap();
     }
 
     #[test]
@@ -559,12 +597,12 @@ mod tests {
         assert_eq!(c.near, 3.0 * 0.99);
         assert_eq!(c.far, 5.0 * 1.01 + size * 1e-6);
         assert!(c.validate().is_ok());
-        // The eye inside the box: the near plane keeps 10^4 : 1.
+        // The eye inside the box: the near plane keeps 10^6 : 1.
         let mut inside = Camera::perspective(DVec3::ZERO, DVec3::X, DVec3::Z, 60.0, 1.0, 2.0);
         inside.fit_depth_range(&b);
         let far = 1.0 * 1.01 + size * 1e-6;
         assert_eq!(inside.far, far);
-        assert_eq!(inside.near, far * 1e-4);
+        assert_eq!(inside.near, far * 1e-6);
         // Orthographic: the near plane may be behind the eye.
         let mut ortho = Camera {
             projection: Projection::Orthographic { height: 2.0 },
