@@ -607,3 +607,46 @@ fn triangle_at(at: DVec3) -> ObjectDesc {
     b.push_face(&[0, 1, 2], None).unwrap();
     ObjectDesc::new("far", b.finish().0)
 }
+
+/// Orthographic planes far wider than the scene: the depth keys span the objects'
+/// depths, not `near..far`, so the image and the depths are those of planes fitted to
+/// the scene. (Keys linear over `0.001..1e9` in `f32` have a step of 60 units: 1256 of
+/// 3355 pixels of the demo scene took the wrong face, and every depth was 0.001; with
+/// `-1e10..1e10` every depth was 0.)
+#[test]
+fn orthographic_depth_keys_span_the_scene_not_the_planes() {
+    let scene = demo::default_scene();
+    let (w, h) = (100, 80);
+    let base = scene.default_camera(f64::from(w) / f64::from(h));
+    let mut fitted = Camera::orthographic(base.eye, base.target, base.up, 8.0, 1.0, 2.0);
+    fitted.fit_depth_range(&scene.bounds());
+    let reference = zbuffer(&scene, &fitted, w, h, &PrepareOptions::default());
+    let covered = reference.ids.iter().filter(|&&i| i != BACKGROUND).count();
+    assert!(covered > 2000, "{covered}");
+    for (near, far) in [(0.001, 1e9), (-1e10, 1e10), (fitted.near, 1e20)] {
+        let wide = Camera {
+            near,
+            far,
+            ..fitted
+        };
+        let frame = zbuffer(&scene, &wide, w, h, &PrepareOptions::default());
+        let wrong = frame
+            .ids
+            .iter()
+            .zip(&reference.ids)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(
+            wrong <= 3,
+            "near {near}, far {far}: {wrong} of {covered} pixels differ"
+        );
+        for (k, (&d, &r)) in frame.depth.iter().zip(&reference.depth).enumerate() {
+            if frame.ids[k] != BACKGROUND && frame.ids[k] == reference.ids[k] {
+                assert!(
+                    d > 0.0 && (d - r).abs() <= 1e-5 * r,
+                    "pixel {k}: {d} vs {r}"
+                );
+            }
+        }
+    }
+}
