@@ -292,7 +292,7 @@ fn obj_objects_groups_reference_forms_and_face_order() {
         s.report()
             .messages
             .iter()
-            .any(|m| m.contains("groups.obj:21") && m.contains("nowhere")),
+            .any(|m| m.contains("\"nowhere\" (line 21)")),
         "{:?}",
         s.report().messages
     );
@@ -446,9 +446,10 @@ fn obj_materials_from_mtl_with_warnings_for_missing_ones() {
     assert_eq!(c(6), o.color, "unknown material: the object colour");
     let messages = s.report().messages.join("\n");
     assert!(messages.contains("missing.mtl"), "{messages}");
-    assert!(messages.contains("colored.obj:1"), "{messages}");
-    assert!(messages.contains("colours.mtl:11"), "{messages}");
-    assert!(messages.contains("\"unknown\""), "{messages}");
+    assert!(messages.contains("line 1:"), "{messages}");
+    assert!(messages.contains("colours.mtl"), "{messages}");
+    assert!(messages.contains("line 11: malformed Kd"), "{messages}");
+    assert!(messages.contains("\"unknown\" (line 16)"), "{messages}");
 }
 
 #[test]
@@ -1132,11 +1133,17 @@ fn gltf_embedded_and_glb_node_hierarchy() {
     let (g, rest) = hierarchy();
     assert_hierarchy(&load(&dir.write("tree.gltf", g.gltf_embedded(&rest))));
     assert_hierarchy(&load(&dir.write("tree.glb", g.glb(&rest))));
-    // Without a default scene every scene's roots are placed, scene by scene.
+    // Without a default scene, scene 0 is placed (the scenes are alternatives, not
+    // parts: drawing them all would overlap them), and a warning says so.
     let (g, rest) = hierarchy_with(false);
     let s = load(&dir.write("all.gltf", g.gltf_embedded(&rest)));
     let names: Vec<&str> = s.objects().iter().map(|o| o.name.as_str()).collect();
-    assert_eq!(names, ["elsewhere", "parent", "child"]);
+    assert_eq!(names, ["elsewhere"]);
+    let messages = s.report().messages.join("\n");
+    assert!(
+        messages.contains("2 scenes") && messages.contains("scene 0"),
+        "{messages}"
+    );
 }
 
 #[test]
@@ -1151,10 +1158,14 @@ fn gltf_external_buffer() {
         ),
     );
     let p = dir.write("external.gltf", &json);
-    match load_err(&p) {
-        Error::Io { path, .. } => assert!(path.ends_with("data/square.bin"), "{path:?}"),
-        e => panic!("expected an Io error naming the buffer, got {e:?}"),
-    }
+    // The error names the glTF, the buffer and its URI, then the missing file.
+    let e = load_err(&p);
+    assert_element(&e, &p, "buffer 0 (uri \"data/square.bin\")", "no such file");
+    assert!(
+        e.to_string()
+            .contains(&format!("{}", dir.0.join("data/square.bin").display())),
+        "{e}"
+    );
     dir.write("data/square.bin", &g.bin);
     assert_hierarchy(&load(&p));
     // A buffer shorter than it says.
@@ -1730,16 +1741,9 @@ fn gltf_references_to_missing_accessors_and_bad_buffer_uris_are_errors() {
         "folder.gltf",
         r#"{"asset": {"version": "2.0"}, "buffers": [{"byteLength": 4, "uri": "folder%2Ebin"}]}"#,
     );
-    match load_err(&p) {
-        Error::Io { path, source } => {
-            assert!(path.ends_with("folder.bin"), "{path:?}");
-            assert!(
-                source.to_string().contains("not a regular file"),
-                "{source}"
-            );
-        }
-        e => panic!("expected an Io error naming the buffer, got {e:?}"),
-    }
+    let e = load_err(&p);
+    assert_element(&e, &p, "buffer 0", "not a regular file");
+    assert!(e.to_string().contains("folder.bin"), "{e}");
     // A percent-encoded name of a real file is decoded.
     let mut g = GltfBuffer::default();
     let (p0, i0) = (g.positions(&SQUARE), g.indices(&[0, 1, 2]));
@@ -1868,4 +1872,369 @@ fn ply_headers_declaring_a_name_twice_are_errors() {
         "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nelement vertex 0\nend_header\n",
     );
     assert_at_line(&load_err(&p), &p, 5, "element \"vertex\" is declared twice");
+}
+
+// ---------------------------------------------------------------------------------
+// Findings of the CLI review (F1, F6, F7, F8, F13, F21, F23)
+
+const BOM: &str = "\u{feff}";
+
+/// A byte-order mark at the start of a text file (or a text header) is skipped: it
+/// used to hide the first statement (a vertex, an `mtllib`, a `newmtl`) or make an
+/// ASCII STL look binary.
+#[test]
+fn a_byte_order_mark_at_the_start_of_text_files_is_skipped() {
+    let dir = TempDir::new("bom");
+    // OBJ: the first vertex is kept, so face 0 is the triangle the file means.
+    let p = dir.write(
+        "bom.obj",
+        format!("{BOM}v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 5 5\nf 1 2 3\n"),
+    );
+    let s = load(&p);
+    assert!(same_cycle(
+        &face_polygons(&s, 0)[0],
+        &[v(0., 0., 0.), v(1., 0., 0.), v(0., 1., 0.)]
+    ));
+    // OBJ whose first line is `mtllib`, and an MTL whose first line is `newmtl`.
+    dir.write("m.mtl", format!("{BOM}newmtl red\nKd 1 0 0\n"));
+    let p = dir.write(
+        "bom_mtllib.obj",
+        format!("{BOM}mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n"),
+    );
+    let s = load(&p);
+    assert_eq!(s.objects()[0].face_color(0), [1.0, 0.0, 0.0]);
+    assert!(s.report().messages.is_empty(), "{:?}", s.report().messages);
+    // ASCII PLY header.
+    let p = dir.write("bom.ply", format!("{BOM}{}", ascii_ply(&cube_faces())));
+    assert_ply_cube(&load(&p));
+    // ASCII STL: read as ASCII, not as a binary file announcing millions of facets.
+    let p = dir.write(
+        "bom.stl",
+        format!("{BOM}{}", ascii_stl("block", &cube_triangles(), "\n")),
+    );
+    let s = load(&p);
+    assert_stl_cube(&s);
+    assert_eq!(s.objects()[0].name, "block");
+    // glTF JSON (the specification lets readers ignore a BOM).
+    let (g, rest) = hierarchy();
+    let p = dir.write("bom.gltf", format!("{BOM}{}", g.gltf_embedded(&rest)));
+    assert_hierarchy(&load(&p));
+    // Scene TOML.
+    dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let p = dir.write("bom.toml", format!("{BOM}[[object]]\nmesh = \"tri.obj\"\n"));
+    assert_eq!(load(&p).face_count(), 1);
+}
+
+/// The usual layout of a multi-material glTF mesh: one POSITION accessor, an index
+/// accessor per primitive. Each primitive used to decode (and copy into the mesh) all
+/// the vertices again, and the file was refused for asking too much memory.
+#[test]
+fn gltf_primitives_sharing_one_position_accessor_share_its_vertices() {
+    const VERTICES: usize = 20_000;
+    const PRIMITIVES: usize = 1000;
+    let dir = TempDir::new("gltf-shared");
+    let mut g = GltfBuffer::default();
+    let points: Vec<[f32; 3]> = (0..VERTICES)
+        .map(|i| [i as f32, if i % 3 == 1 { 1.0 } else { 0.0 }, 0.0])
+        .collect();
+    let pos = g.positions(&points);
+    let primitives: Vec<String> = (0..PRIMITIVES)
+        .map(|k| {
+            let i = (3 * k) as u16;
+            let idx = g.indices(&[i, i + 1, i + 2]);
+            format!(r#"{{"attributes": {{"POSITION": {pos}}}, "indices": {idx}}}"#)
+        })
+        .collect();
+    let rest = format!(
+        r#""meshes": [{{"primitives": [{}]}}], "nodes": [{{"mesh": 0}}], "scenes": [{{"nodes": [0]}}], "scene": 0"#,
+        primitives.join(", ")
+    );
+    dir.write("shared.bin", &g.bin);
+    let p = dir.write(
+        "shared.gltf",
+        g.json(
+            &rest,
+            &format!(r#"{{"byteLength": {}, "uri": "shared.bin"}}"#, g.bin.len()),
+        ),
+    );
+    let s = load(&p);
+    assert_eq!(s.face_count() as usize, PRIMITIVES);
+    assert_eq!(s.polygon_count(), PRIMITIVES);
+    assert_eq!(
+        s.objects()[0].mesh.positions().len(),
+        VERTICES,
+        "decoded once"
+    );
+    assert!(same_cycle(
+        &face_polygons(&s, 999)[0],
+        &[v(2997., 0., 0.), v(2998., 1., 0.), v(2999., 0., 0.)]
+    ));
+}
+
+/// A coordinate beyond the accepted range is refused where the loader knows the line
+/// or element, not later by the scene, which only knew the object.
+#[test]
+fn coordinates_beyond_the_accepted_range_name_the_file_and_line_or_element() {
+    let dir = TempDir::new("range");
+    let p = dir.write("big.obj", "v -2e30 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    assert_at_line(
+        &load_err(&p),
+        &p,
+        1,
+        "-2e30 is beyond the largest coordinate",
+    );
+    // 1e31 used to pass the loader and leave the face dropped as a sliver: an empty
+    // scene that never mentioned the coordinate.
+    let p = dir.write("sliver.obj", "v 0 0 0\nv 1e31 0 0\nv 0 1 0\nf 1 2 3\n");
+    assert_at_line(&load_err(&p), &p, 2, "1e31");
+    let mut faces = ascii_ply(&cube_faces());
+    faces = faces.replacen("1 1 1 255 0 0", "1 1 3e30 255 0 0", 1);
+    let p = dir.write("big.ply", faces);
+    let line = 1 + ascii_ply(&cube_faces())
+        .lines()
+        .position(|l| l == "1 1 1 255 0 0")
+        .unwrap();
+    assert_at_line(&load_err(&p), &p, line, "vertex 7: coordinate 3e30");
+    let mut tris = cube_triangles();
+    tris[4][2].z = -5e35;
+    let p = dir.write("big.stl", binary_stl(b"", &tris));
+    assert_element(&load_err(&p), &p, "facet 4", "vertex 2: coordinate -5e35");
+    // glTF: in the accessor, and in world space under a node's scale.
+    let mut g = GltfBuffer::default();
+    let pos = g.positions(&[[0., 0., 0.], [1., 0., 0.], [0., 4e30, 0.]]);
+    let rest = format!(
+        r#""meshes": [{{"primitives": [{{"attributes": {{"POSITION": {pos}}}}}]}}], "nodes": [{{"mesh": 0}}]"#
+    );
+    let p = dir.write("big.gltf", g.gltf_embedded(&rest));
+    assert_element(
+        &load_err(&p),
+        &p,
+        "accessor 0 (POSITION)",
+        "vertex 2: coordinate 4",
+    );
+    let mut g = GltfBuffer::default();
+    let pos = g.positions(&[[0., 0., 0.], [1., 0., 0.], [0., 1., 0.]]);
+    let rest = format!(
+        r#""meshes": [{{"primitives": [{{"attributes": {{"POSITION": {pos}}}}}]}}], "nodes": [{{"name": "far", "mesh": 0, "scale": [1e30, 1e30, 1e30]}}]"#
+    );
+    let p = dir.write("hugescale.gltf", g.gltf_embedded(&rest));
+    assert_element(&load_err(&p), &p, "node 0 (far)", "beyond the largest");
+}
+
+/// An empty scene says why: the warnings of the loader come with the error.
+#[test]
+fn empty_scenes_carry_the_warnings_that_explain_them() {
+    let dir = TempDir::new("empty-why");
+    let empty_message = |p: &Path| match load_err(p) {
+        Error::EmptyScene(m) => m,
+        e => panic!("expected an empty scene, got {e:?}"),
+    };
+    let mut g = GltfBuffer::default();
+    let pos = g.positions(&[[0., 0., 0.], [1., 0., 0.], [0., 1., 0.]]);
+    let prim = |mode: u32| format!(r#"{{"attributes": {{"POSITION": {pos}}}, "mode": {mode}}}"#);
+    // A node hidden by a zero scale.
+    let rest = format!(
+        r#""meshes": [{{"primitives": [{}]}}], "nodes": [{{"name": "hidden", "mesh": 0, "scale": [0, 1, 1]}}]"#,
+        prim(4)
+    );
+    let m = empty_message(&dir.write("zeroscale.gltf", g.gltf_embedded(&rest)));
+    assert!(
+        m.contains("singular transform") && m.contains("hidden"),
+        "{m}"
+    );
+    // Only lines and points.
+    let rest = format!(
+        r#""meshes": [{{"primitives": [{}, {}]}}], "nodes": [{{"mesh": 0}}]"#,
+        prim(1),
+        prim(0)
+    );
+    let m = empty_message(&dir.write("lines.gltf", g.gltf_embedded(&rest)));
+    assert!(
+        m.contains("2 primitive(s) skipped") && m.contains("Lines"),
+        "{m}"
+    );
+    // A binary STL whose header says 0 facets, followed by facets.
+    let mut bytes = binary_stl(b"", &cube_triangles()[..2]);
+    bytes[80..84].copy_from_slice(&0u32.to_le_bytes());
+    let m = empty_message(&dir.write("count0.stl", bytes));
+    assert!(m.contains("100 bytes after the 0 facets"), "{m}");
+    // Only degenerate faces.
+    let m = empty_message(&dir.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n"));
+    assert!(m.contains("1 degenerate face(s)"), "{m}");
+}
+
+/// A glTF node graph with a cycle and no scene used to yield an empty scene without a
+/// word (no node was parentless, so none was a root).
+#[test]
+fn gltf_node_cycles_are_errors_even_without_a_scene() {
+    let dir = TempDir::new("gltf-cycle");
+    let mut g = GltfBuffer::default();
+    let pos = g.positions(&[[0., 0., 0.], [1., 0., 0.], [0., 1., 0.]]);
+    let rest = format!(
+        r#""meshes": [{{"primitives": [{{"attributes": {{"POSITION": {pos}}}}}]}}], "nodes": [{{"children": [1]}}, {{"children": [0], "mesh": 0}}]"#
+    );
+    let p = dir.write("cycle.gltf", g.gltf_embedded(&rest));
+    assert_element(&load_err(&p), &p, "node 0", "cycle");
+}
+
+/// Errors about external glTF buffers name the glTF file and the buffer; remote URIs
+/// are refused as such instead of being looked up as local paths.
+#[test]
+fn gltf_buffer_errors_name_the_gltf_and_the_buffer_and_remote_uris_are_refused() {
+    let dir = TempDir::new("gltf-buffers");
+    let (g, rest) = hierarchy();
+    for uri in [
+        "http://example.com/x.bin",
+        "https://example.com/x.bin",
+        "ftp://h/x.bin",
+    ] {
+        let p = dir.write(
+            "remote.gltf",
+            g.json(
+                &rest,
+                &format!(r#"{{"byteLength": {}, "uri": "{uri}"}}"#, g.bin.len()),
+            ),
+        );
+        let e = load_err(&p);
+        assert_element(
+            &e,
+            &p,
+            &format!("buffer 0 (uri \"{uri}\")"),
+            "remote buffers are not supported",
+        );
+    }
+    let p = dir.write(
+        "missing.gltf",
+        g.json(
+            &rest,
+            &format!(r#"{{"byteLength": {}, "uri": "missing.bin"}}"#, g.bin.len()),
+        ),
+    );
+    let e = load_err(&p);
+    assert_element(&e, &p, "buffer 0 (uri \"missing.bin\")", "missing.bin");
+}
+
+/// Warnings that repeat are aggregated, and a warning does not name the file loaded
+/// (the caller prints it once); a scene file's report names the mesh file.
+#[test]
+fn warnings_are_aggregated_and_do_not_repeat_the_file_name() {
+    let dir = TempDir::new("warnings");
+    dir.write("odd.mtl", "newmtl known\nKd 0 1 0\n");
+    let mut text = String::from("mtllib odd.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    for k in 0..1000 {
+        text.push_str(&format!("usemtl m{k}\nf 1 2 3\n"));
+    }
+    let p = dir.write("manymtl.obj", &text);
+    let s = load(&p);
+    let messages = &s.report().messages;
+    assert_eq!(messages.len(), 1, "{messages:?}");
+    let m = &messages[0];
+    assert!(m.starts_with("1000 unknown material(s)"), "{m}");
+    assert!(
+        m.contains("\"m0\" (line 5)") && m.contains("and 997 more"),
+        "{m}"
+    );
+    assert!(!m.contains("manymtl.obj"), "the caller names the file: {m}");
+    // Through a scene file, the warning names the mesh file (once).
+    let t = dir.write("scene.toml", "[[object]]\nmesh = \"manymtl.obj\"\n");
+    let s = load(&t);
+    let m = &s.report().messages[0];
+    assert_eq!(m.matches("manymtl.obj").count(), 1, "{m}");
+    assert!(m.contains("1000 unknown material(s)"), "{m}");
+    // Malformed MTL lines: one warning naming the library.
+    dir.write(
+        "bad.mtl",
+        "newmtl a\nKd x\nKd 1 2\nKd spectral f.rfl\nKd 1 1 1 1\n",
+    );
+    let p = dir.write(
+        "badmtl.obj",
+        "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+    );
+    let s = load(&p);
+    let messages = &s.report().messages;
+    assert_eq!(messages.len(), 1, "{messages:?}");
+    assert!(
+        messages[0].contains("bad.mtl: 4 Kd line(s)"),
+        "{messages:?}"
+    );
+    assert!(messages[0].contains("line 2: malformed"), "{messages:?}");
+}
+
+/// An ASCII STL holding several solids yields them all (the second was dropped).
+#[test]
+fn ascii_stl_with_several_solids_loads_them_all() {
+    let dir = TempDir::new("stl-solids");
+    let tris = cube_triangles();
+    let text = format!(
+        "{}{}",
+        ascii_stl("first", &tris[..2], "\n"),
+        ascii_stl("second", &tris[2..], "\n")
+    );
+    let s = load(&dir.write("two.stl", &text));
+    let names: Vec<&str> = s.objects().iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["first", "second"]);
+    assert_eq!(s.face_count(), 12);
+    for (k, t) in tris.iter().enumerate() {
+        assert_eq!(face_polygons(&s, k as u32), vec![t.to_vec()], "facet {k}");
+    }
+    // Errors in the second solid name it, and count facets across the file.
+    let bad = text.replacen("vertex 1 1 1", "vertex 1 x 1", 1);
+    let at = tris
+        .iter()
+        .position(|t| t.contains(&v(1., 1., 1.)))
+        .unwrap();
+    assert!(at >= 2, "the first (1, 1, 1) is in the second solid");
+    let p = dir.write("bad.stl", bad);
+    assert_element(
+        &load_err(&p),
+        &p,
+        &format!("solid 1 (\"second\") facet {at}"),
+        "",
+    );
+    // Text after the last endsolid that is not a solid is a warning.
+    let s = load(&dir.write(
+        "junk.stl",
+        format!("{}garbage\n", ascii_stl("a", &tris, "\n")),
+    ));
+    assert_eq!(s.face_count(), 12);
+    let messages = s.report().messages.join("\n");
+    assert!(messages.contains("after the last endsolid"), "{messages}");
+}
+
+/// A PLY face element with both `vertex_indices` and `vertex_index` lists used to join
+/// them into one polygon.
+#[test]
+fn ply_faces_with_two_index_lists_are_refused() {
+    let dir = TempDir::new("ply-both");
+    let p = dir.write(
+        "both.ply",
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+         element face 1\nproperty list uchar int vertex_indices\nproperty list uchar int vertex_index\nend_header\n\
+         0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2 3 1 3 2\n",
+    );
+    assert_element(
+        &load_err(&p),
+        &p,
+        "face",
+        "both a vertex_indices and a vertex_index",
+    );
+}
+
+/// A scene listing the same node twice places it once (it was drawn twice, each face
+/// fighting its copy).
+#[test]
+fn gltf_scene_listing_a_node_twice_places_it_once() {
+    let dir = TempDir::new("gltf-dup");
+    let mut g = GltfBuffer::default();
+    let pos = g.positions(&[[0., 0., 0.], [1., 0., 0.], [0., 1., 0.]]);
+    let rest = format!(
+        r#""meshes": [{{"primitives": [{{"attributes": {{"POSITION": {pos}}}}}]}}], "nodes": [{{"mesh": 0}}], "scenes": [{{"nodes": [0, 0]}}], "scene": 0"#
+    );
+    let s = load(&dir.write("dup.gltf", g.gltf_embedded(&rest)));
+    assert_eq!(s.objects().len(), 1);
+    let messages = s.report().messages.join("\n");
+    assert!(
+        messages.contains("listed again") && messages.contains("node 0"),
+        "{messages}"
+    );
 }

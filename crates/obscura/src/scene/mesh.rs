@@ -36,7 +36,10 @@ pub struct LoadReport {
     pub nonplanar_faces: usize,
     /// Planar concave n-gons that were triangulated.
     pub concave_faces: usize,
-    /// Other warnings, each naming its file or object.
+    /// Other warnings. Each names the line or element of the file loaded (`line 5: ...`,
+    /// `node 3 (...)`) but not that file, which the caller knows and names once (a
+    /// scene file's report names the mesh files its warnings come from); a warning
+    /// about another file (a material library) names it.
     pub messages: Vec<String>,
 }
 

@@ -357,10 +357,13 @@ impl Scene {
         Some((k, id - self.objects[k].first_face))
     }
 
-    /// Fails with [`Error::EmptyScene`] when there is no polygon to render.
+    /// Fails with [`Error::EmptyScene`] when there is no polygon to render. The
+    /// message carries the load report's warnings (the first few), which usually say
+    /// why: nodes or primitives skipped, faces dropped.
     pub fn ensure_not_empty(&self, what: &str) -> Result<()> {
+        const SHOWN: usize = 5;
         if self.polygon_count() == 0 {
-            let why = if self.objects.is_empty() {
+            let mut why = if self.objects.is_empty() {
                 format!("{what} has no objects")
             } else {
                 format!(
@@ -368,6 +371,15 @@ impl Scene {
                     self.objects.len()
                 )
             };
+            let warnings = self.report.warnings();
+            if !warnings.is_empty() {
+                why.push_str(" (loading warned: ");
+                why.push_str(&warnings[..warnings.len().min(SHOWN)].join("; "));
+                if warnings.len() > SHOWN {
+                    why.push_str(&format!("; and {} more", warnings.len() - SHOWN));
+                }
+                why.push(')');
+            }
             return Err(Error::EmptyScene(why));
         }
         Ok(())

@@ -3,8 +3,10 @@
 //!
 //! Input: the bytes of the file (and its directory, for external buffers). Output: one
 //! object per node that has a mesh, in depth-first order of the default scene's node
-//! hierarchy (of every scene's roots, in scene order, when there is no default scene;
-//! of the parentless nodes when there is no scene at all). The object's transform is
+//! hierarchy (of scene 0 when there is no default `scene`, with a warning when there
+//! are other scenes: they are alternatives, drawn on top of each other they would
+//! overlap; of the parentless nodes when there is no scene at all). A node a scene
+//! lists twice is placed once (warning). The object's transform is
 //! the node's world transform: the product of the matrices (or translation, rotation,
 //! scale) from the root down. A mesh used by several nodes is built once and shared.
 //! Up is +y (`Loaded::up`), as the format defines.
@@ -19,14 +21,23 @@
 //! Accessors are read here, not by the crate's reader, so that every offset, stride
 //! and count is checked against its buffer view and buffer: a malformed file gives an
 //! error naming the mesh, primitive and accessor instead of a panic. Sparse accessors
-//! and normalized integer positions (`KHR_mesh_quantization`) are supported.
+//! and normalized integer positions (`KHR_mesh_quantization`) are supported. The
+//! primitives of a mesh that share one POSITION accessor (the usual layout of a
+//! multi-material mesh: one vertex array, an index range per material) share its
+//! vertices: the accessor is decoded once per mesh.
 //!
-//! Errors (naming the file and the element): invalid JSON or GLB container, a missing
-//! or short buffer, an accessor outside its buffer view, a wrong accessor type, a
-//! non-finite position or node transform, an index not below the primitive's vertex
-//! count, a node with two parents or a scene root that has a parent (a cycle).
-//! A node whose world transform is singular (scale 0, used to hide nodes) is skipped
-//! with a warning.
+//! Buffers: the GLB binary chunk, base64 `data:` URIs, and files (relative to the glTF,
+//! or `file:` URIs); remote (`http:`, `https:`...) URIs are refused. A UTF-8 byte-order
+//! mark before the JSON is skipped, as the specification allows.
+//!
+//! Errors (naming the file and the element): invalid JSON or GLB container, a missing,
+//! remote or short buffer (naming it and its URI), an accessor outside its buffer view,
+//! a wrong accessor type, a non-finite position or node transform, a position beyond
+//! [`MAX_COORDINATE`](crate::scene::MAX_COORDINATE) (in the accessor, or in world space
+//! under a node's transform), an index not below the primitive's vertex count, a node
+//! with two parents, a scene root that has a parent, a cycle of children.
+//! Nodes whose world transform is singular (scale 0, used to hide nodes) and
+//! primitives that are points or lines are skipped, with one warning for each kind.
 //!
 //! Complexity: O(file size + nodes). Source: the Khronos glTF 2.0 specification
 //! (sections 3.5 Nodes and hierarchy, 3.6 Binary data storage, 3.7.2 Meshes).
@@ -40,7 +51,7 @@ use gl::accessor::{DataType, Dimensions};
 use gl::mesh::Mode;
 use glam::{DMat4, DQuat, DVec3};
 
-use super::{Loaded, clamp_color, palette_color};
+use super::{Loaded, Tally, clamp_color, coordinate_out_of_range, palette_color, strip_bom};
 use crate::scene::{Material, Mesh, MeshBuilder, ObjectDesc};
 use crate::{Error, Result};
 
@@ -57,10 +68,15 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
         "document"
     };
     let invalid = |e: gl::Error| Error::format(path, element, e.to_string());
+    let json = if bytes.starts_with(b"glTF") {
+        bytes
+    } else {
+        strip_bom(bytes)
+    };
     // Parsed first without the crate's validation, whose checks index the accessors a
     // primitive names before checking that they exist: those indices are checked here,
     // then the document is validated.
-    let gltf = gl::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
+    let gltf = gl::Gltf::from_slice_without_validation(json).map_err(invalid)?;
     check_accessor_indices(path, gltf.document.as_json())?;
     let document = gl::Document::from_json(gltf.document.into_json()).map_err(invalid)?;
     let doc = &document;
@@ -88,15 +104,43 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
             parent[child.index()] = Some(node.index());
         }
     }
-    let roots: Vec<gl::Node<'_>> = if let Some(scene) = doc.default_scene() {
+    if let Some(node) = first_in_cycle(&parent) {
+        return Err(Error::format(
+            path,
+            format!("node {node}"),
+            "is its own ancestor: its children form a cycle (nodes must form trees)",
+        ));
+    }
+    let mut warnings = Warnings::default();
+    let listed: Vec<gl::Node<'_>> = if let Some(scene) = doc.default_scene() {
         scene.nodes().collect()
-    } else if doc.scenes().len() > 0 {
-        doc.scenes().flat_map(|s| s.nodes()).collect()
+    } else if let Some(first) = doc.scenes().next() {
+        let n = doc.scenes().len();
+        if n > 1 {
+            loaded.report.messages.push(format!(
+                "the file has {n} scenes and no default `scene`: scene 0 is drawn, the \
+                 others are left out (alternatives drawn together would overlap)"
+            ));
+        }
+        first.nodes().collect()
     } else {
         doc.nodes()
             .filter(|n| parent[n.index()].is_none())
             .collect()
     };
+    // A scene lists each node once (glTF 2.0, 5.29); a repeated one would be drawn twice
+    // in the same place, every face fighting its copy.
+    let mut placed = vec![false; node_count];
+    let mut roots = Vec::with_capacity(listed.len());
+    for node in listed {
+        if std::mem::replace(&mut placed[node.index()], true) {
+            warnings
+                .repeated_roots
+                .add(|| format!("node {}", node.index()));
+        } else {
+            roots.push(node);
+        }
+    }
     // Every node has at most one parent, so walking down from parentless roots visits
     // each node once; a root with a parent would be part of a cycle or a subtree.
     for root in &roots {
@@ -137,7 +181,14 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
             let Some(mesh) = node.mesh() else { continue };
             let m = mesh.index();
             if meshes[m].is_none() {
-                let (built, color) = build_mesh(path, &mesh, &buffers, &mut budget, &mut loaded)?;
+                let (built, color) = build_mesh(
+                    path,
+                    &mesh,
+                    &buffers,
+                    &mut budget,
+                    &mut loaded,
+                    &mut warnings,
+                )?;
                 meshes[m] = Some(Arc::new(built));
                 colors[m] = color;
             }
@@ -148,12 +199,17 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
             // Affine (checked per node), so this is the 3x3 part's determinant.
             let det = world.determinant();
             if det == 0.0 || !det.is_finite() {
-                loaded.report.messages.push(format!(
-                    "{}: node {} ({node_name}) has a singular transform (a zero scale): skipped",
-                    path.display(),
-                    node.index()
-                ));
+                warnings
+                    .singular_nodes
+                    .add(|| format!("node {} ({node_name})", node.index()));
                 continue;
+            }
+            if let Some(why) = world_out_of_range(&shared, &world) {
+                return Err(Error::format(
+                    path,
+                    format!("node {} ({node_name})", node.index()),
+                    format!("mesh {}: {why}", mesh.index()),
+                ));
             }
             loaded.objects.push(ObjectDesc {
                 name: node_name,
@@ -165,7 +221,85 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
             });
         }
     }
+    warnings.finish(&mut loaded.report.messages);
     Ok(loaded)
+}
+
+/// The warnings a file may repeat many times, one line per kind.
+#[derive(Default)]
+struct Warnings {
+    skipped_primitives: Tally,
+    singular_nodes: Tally,
+    repeated_roots: Tally,
+}
+
+impl Warnings {
+    fn finish(self, messages: &mut Vec<String>) {
+        self.skipped_primitives.finish(messages, |n| {
+            format!("{n} primitive(s) skipped: points and lines are not surfaces")
+        });
+        self.singular_nodes.finish(messages, |n| {
+            format!(
+                "{n} node(s) with a singular transform (a zero scale, used to hide a node) skipped"
+            )
+        });
+        self.repeated_roots.finish(messages, |n| {
+            format!("{n} node(s) listed again by the scene placed once")
+        });
+    }
+}
+
+/// A node that is its own ancestor, if any (`parent` holds each node's only parent).
+fn first_in_cycle(parent: &[Option<usize>]) -> Option<usize> {
+    // 0: not seen, 1: reaches a root, 2: on the chain being walked.
+    let mut state = vec![0u8; parent.len()];
+    let mut chain = Vec::new();
+    for start in 0..parent.len() {
+        let mut at = Some(start);
+        while let Some(n) = at {
+            match state[n] {
+                1 => break,
+                2 => return Some(n),
+                _ => {}
+            }
+            state[n] = 2;
+            chain.push(n);
+            at = parent[n];
+        }
+        for n in chain.drain(..) {
+            state[n] = 1;
+        }
+    }
+    None
+}
+
+/// Where a mesh placed by `world` leaves the accepted coordinate range, if it does: the
+/// message names the vertex (the scene would refuse it without knowing the node).
+fn world_out_of_range(mesh: &Mesh, world: &DMat4) -> Option<String> {
+    let bounds = mesh.bounds();
+    if bounds.is_empty() {
+        return None;
+    }
+    // A linear image of a box reaches its extremes at the box's corners.
+    let inside = bounds
+        .corners()
+        .iter()
+        .all(|&c| coordinate_out_of_range(world.transform_point3(c).to_array()).is_none());
+    if inside {
+        return None;
+    }
+    let (_, indices, _) = mesh.polygon_arrays();
+    indices.iter().find_map(|&i| {
+        let p = mesh.positions()[i as usize];
+        let w = world.transform_point3(p);
+        coordinate_out_of_range(w.to_array()).map(|m| {
+            format!(
+                "vertex {:?} is placed at {:?}: {m}",
+                p.to_array(),
+                w.to_array()
+            )
+        })
+    })
 }
 
 /// A node's local matrix in `f64`: its `matrix`, or `T R S` from its translation,
@@ -272,7 +406,9 @@ fn check_accessor_indices(path: &Path, root: &gl::json::Root) -> Result<()> {
 
 /// Reads a buffer held in a file (a URI that is not a `data:` one), relative to the
 /// glTF's folder unless `file:`: its percent-encoding decoded, only a regular file, at
-/// most the buffer's declared length read.
+/// most the buffer's declared length read. Errors name the glTF file and `element`
+/// (the buffer and its URI), then the file that could not be read. Other schemes
+/// (`http:`, `https:`...) are refused: obscura reads no network.
 fn read_buffer_file(
     path: &Path,
     element: &str,
@@ -280,6 +416,16 @@ fn read_buffer_file(
     uri: &str,
     length: usize,
 ) -> Result<Vec<u8>> {
+    if let Some(scheme) = uri_scheme(uri).filter(|s| !s.eq_ignore_ascii_case("file")) {
+        return Err(Error::format(
+            path,
+            element,
+            format!(
+                "remote buffers are not supported ({scheme}: URI); download the file next to \
+                 the glTF and refer to it by a relative URI"
+            ),
+        ));
+    }
     let (rest, relative) = match uri
         .strip_prefix("file://")
         .or_else(|| uri.strip_prefix("file:"))
@@ -299,7 +445,7 @@ fn read_buffer_file(
     } else {
         std::path::PathBuf::from(&name)
     };
-    let io = |e| Error::io(&file, e);
+    let io = |e: std::io::Error| Error::format(path, element, format!("{}: {e}", file.display()));
     super::check_regular_file(&file).map_err(io)?;
     let mut data = Vec::new();
     std::io::Read::read_to_end(
@@ -308,6 +454,17 @@ fn read_buffer_file(
     )
     .map_err(io)?;
     Ok(data)
+}
+
+/// The scheme of an absolute URI (`http` in `http://host/x.bin`), if it has one. A
+/// relative reference cannot have a colon in its first segment (RFC 3986, 4.2), and a
+/// one-letter scheme would be a Windows drive (`C:`), taken as a path.
+fn uri_scheme(uri: &str) -> Option<&str> {
+    let (scheme, _) = uri.split_once(':')?;
+    let mut chars = scheme.chars();
+    let valid = chars.next().is_some_and(|c| c.is_ascii_alphabetic())
+        && chars.all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.'));
+    (valid && scheme.len() > 1).then_some(scheme)
 }
 
 /// Decodes `%XX` escapes; `None` when an escape is malformed or the result is not UTF-8.
@@ -337,7 +494,12 @@ fn load_buffers(
     let base = path.parent().unwrap_or(Path::new(""));
     let mut out = Vec::new();
     for buffer in doc.buffers() {
-        let element = format!("buffer {}", buffer.index());
+        let element = match buffer.source() {
+            gl::buffer::Source::Uri(uri) if !uri.starts_with("data:") => {
+                format!("buffer {} (uri \"{uri}\")", buffer.index())
+            }
+            _ => format!("buffer {}", buffer.index()),
+        };
         let data = match buffer.source() {
             gl::buffer::Source::Uri(uri) if !uri.starts_with("data:") => gl::buffer::Data(
                 read_buffer_file(path, &element, base, uri, buffer.length())?,
@@ -363,8 +525,11 @@ fn load_buffers(
 
 /// How many values (components) a file's accessors may decode in all: four per byte
 /// of its buffers, plus one accessor of [`MAX_VIEWLESS_COUNT`] three-component elements
-/// without a buffer view. Primitives reading the same accessor decode it
-/// each time, so a small file could otherwise ask for any amount of memory.
+/// without a buffer view. What is charged is what the meshes hold: a POSITION
+/// accessor once per mesh that reads it (its primitives share the vertices), an index
+/// accessor once per primitive that reads it (each makes its own faces), and the
+/// implicit indices of a primitive without an index accessor. Without a limit, a small
+/// file naming the same accessor many times could ask for any amount of memory.
 fn decode_budget(buffers: &[Vec<u8>]) -> usize {
     let bytes: usize = buffers.iter().map(Vec::len).sum();
     bytes
@@ -379,6 +544,7 @@ fn build_mesh(
     buffers: &[Vec<u8>],
     budget: &mut usize,
     loaded: &mut Loaded,
+    warnings: &mut Warnings,
 ) -> Result<(Mesh, [f32; 3])> {
     let mesh_name = match mesh.name() {
         Some(n) => format!("mesh {} \"{n}\"", mesh.index()),
@@ -387,6 +553,8 @@ fn build_mesh(
     let mut b = MeshBuilder::new();
     let mut materials: HashMap<Option<usize>, u32> = HashMap::new();
     let mut first_color = None;
+    // POSITION accessor -> index of its first vertex in the builder.
+    let mut vertex_base: HashMap<usize, u32> = HashMap::new();
     for prim in mesh.primitives() {
         let what = format!("{mesh_name} primitive {}", prim.index());
         let mode = prim.mode();
@@ -394,10 +562,9 @@ fn build_mesh(
             mode,
             Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
         ) {
-            loaded.report.messages.push(format!(
-                "{}: {what}: {mode:?} primitive skipped (only triangles are surfaces)",
-                path.display()
-            ));
+            warnings
+                .skipped_primitives
+                .add(|| format!("{what} ({mode:?})"));
             continue;
         }
         let Some(pos) = prim.get(&gl::Semantic::Positions) else {
@@ -411,21 +578,31 @@ fn build_mesh(
                 format!("type {:?}, expected VEC3", pos.dimensions()),
             ));
         }
-        let xyz = read_accessor(&pos, 3, buffers, budget)
-            .map_err(|m| Error::format(path, &pos_element, m))?;
-        let base = b.vertex_count() as u32;
         let n = pos.count();
-        for (i, p) in xyz.chunks_exact(3).enumerate() {
-            let p = DVec3::new(p[0], p[1], p[2]);
-            if !p.is_finite() {
-                return Err(Error::format(
-                    path,
-                    pos_element,
-                    format!("vertex {i} is not finite ({:?})", p.to_array()),
-                ));
+        let base = match vertex_base.get(&pos.index()) {
+            Some(&base) => base,
+            None => {
+                let base = b.vertex_count() as u32;
+                let xyz = read_accessor(&pos, 3, buffers, budget)
+                    .map_err(|m| Error::format(path, &pos_element, m))?;
+                for (i, p) in xyz.chunks_exact(3).enumerate() {
+                    let p = DVec3::new(p[0], p[1], p[2]);
+                    if !p.is_finite() {
+                        return Err(Error::format(
+                            path,
+                            pos_element,
+                            format!("vertex {i} is not finite ({:?})", p.to_array()),
+                        ));
+                    }
+                    if let Some(m) = coordinate_out_of_range(p.to_array()) {
+                        return Err(Error::format(path, pos_element, format!("vertex {i}: {m}")));
+                    }
+                    b.push_position(p);
+                }
+                vertex_base.insert(pos.index(), base);
+                base
             }
-            b.push_position(p);
-        }
+        };
         let (indices, index_element) = match prim.indices() {
             Some(acc) => {
                 let element = format!("{what} accessor {} (indices)", acc.index());
@@ -451,7 +628,10 @@ fn build_mesh(
                     element,
                 )
             }
-            None => ((0..n as u64).collect(), pos_element.clone()),
+            None => {
+                spend(budget, n).map_err(|m| Error::format(path, &pos_element, m))?;
+                ((0..n as u64).collect(), pos_element.clone())
+            }
         };
         if let Some(&bad) = indices.iter().find(|&&i| i >= n as u64) {
             return Err(Error::format(
@@ -538,15 +718,6 @@ fn read_accessor(
         .checked_mul(components)
         .filter(|&t| t <= 1 << 31)
         .ok_or_else(|| format!("count {count} is too large"))?;
-    let spend = |budget: &mut usize| {
-        *budget = budget.checked_sub(total).ok_or_else(|| {
-            format!(
-                "the file's accessors decode to more values than it can hold ({total} more \
-                 here; an accessor counts each time a primitive reads it)"
-            )
-        })?;
-        Ok::<(), String>(())
-    };
     let mut out = Vec::new();
     match acc.view() {
         Some(view) => {
@@ -572,7 +743,7 @@ fn read_accessor(
                     ));
                 }
             }
-            spend(budget)?;
+            spend(budget, total)?;
             out.reserve(total);
             for i in 0..count {
                 let at = acc.offset() + i * stride;
@@ -589,7 +760,7 @@ fn read_accessor(
                     "{count} elements without a buffer view (at most {MAX_VIEWLESS_COUNT})"
                 ));
             }
-            spend(budget)?;
+            spend(budget, total)?;
             out.resize(total, 0.0);
         }
     }
@@ -640,6 +811,17 @@ fn read_accessor(
         }
     }
     Ok(out)
+}
+
+/// Takes `values` from the file's decode budget (see [`decode_budget`]).
+fn spend(budget: &mut usize, values: usize) -> std::result::Result<(), String> {
+    *budget = budget.checked_sub(values).ok_or_else(|| {
+        format!(
+            "the file's accessors decode to more values than it can hold ({values} more here; \
+             a POSITION accessor counts once per mesh, indices once per primitive)"
+        )
+    })?;
+    Ok(())
 }
 
 /// The bytes of a buffer view, checked against its buffer.

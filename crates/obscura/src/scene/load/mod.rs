@@ -19,8 +19,19 @@
 //!   found by the loader before the vertex reaches the builder;
 //! - degenerate faces are dropped and counted, non-planar and concave n-gons are
 //!   triangulated and counted, by [`MeshBuilder`];
+//! - a coordinate beyond [`MAX_COORDINATE`] is an error too, naming the line or
+//!   element (the scene would refuse it later, without knowing where it came from);
+//! - a UTF-8 byte-order mark at the start of a text file (or of a text header) is
+//!   skipped, as many Windows exporters write one;
 //! - face ids follow the file's face order;
-//! - an empty file, or one without a usable face, is [`Error::EmptyScene`].
+//! - warnings (in [`LoadReport::messages`]) name the line or element of the file loaded
+//!   but not the file itself, which the caller knows (and prints once); they name any
+//!   other file they are about (a material library). Warnings that may repeat (unknown
+//!   materials, skipped primitives or nodes) are aggregated: one line with the count
+//!   and the first few cases;
+//! - an empty file, or one without a usable face, is [`Error::EmptyScene`], whose
+//!   message carries the warnings that explain why (nodes skipped, primitives that are
+//!   not surfaces, faces dropped).
 //!
 //! Complexity: every loader is linear in the file size (plus the hashing of vertex
 //! positions where a format needs welding). Files are read whole into memory.
@@ -36,7 +47,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{LoadReport, MeshBuilder, ObjectDesc, Scene};
+use super::{LoadReport, MAX_COORDINATE, MeshBuilder, ObjectDesc, Scene};
 use crate::{Error, Result};
 
 /// What a mesh file yields before it is placed in a scene.
@@ -160,6 +171,69 @@ pub(crate) fn clamp_color(c: [f64; 3]) -> [f32; 3] {
             0.0
         }
     })
+}
+
+/// The UTF-8 byte-order mark (U+FEFF) some exporters put at the start of text files.
+pub(crate) const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// The bytes without a leading UTF-8 byte-order mark (lines are unchanged: the mark
+/// is on line 1 and holds no line end).
+pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(BOM).unwrap_or(bytes)
+}
+
+/// An error message for a coordinate beyond [`MAX_COORDINATE`], or `None` when every
+/// coordinate of `p` is within it. Loaders call it where they know the line or element,
+/// so the message is not left to [`Scene::add`], which only knows the object.
+pub(crate) fn coordinate_out_of_range(p: [f64; 3]) -> Option<String> {
+    let bad = p.into_iter().find(|c| c.abs() > MAX_COORDINATE)?;
+    // A value read as `f32` (binary formats, glTF) is shown as the file wrote it,
+    // `3e30` rather than `3.000000054977155e30`.
+    let shown = if f64::from(bad as f32) == bad {
+        format!("{:e}", bad as f32)
+    } else {
+        format!("{bad:e}")
+    };
+    Some(format!(
+        "coordinate {shown} is beyond the largest coordinate accepted, {MAX_COORDINATE:e}"
+    ))
+}
+
+/// How many cases an aggregated warning lists.
+const TALLY_EXAMPLES: usize = 3;
+
+/// Warnings of one kind gathered into one line: the count and the first few cases
+/// (a file can hold a hundred thousand unknown materials; one line each would bury
+/// every other message).
+#[derive(Debug, Default)]
+pub(crate) struct Tally {
+    count: usize,
+    examples: Vec<String>,
+}
+
+impl Tally {
+    /// Counts one case; `example` describes it (called for the first few only).
+    pub(crate) fn add(&mut self, example: impl FnOnce() -> String) {
+        self.count += 1;
+        if self.examples.len() < TALLY_EXAMPLES {
+            self.examples.push(example());
+        }
+    }
+
+    /// Pushes the one-line summary, if any case was counted: `summary(count)` says what
+    /// happened (e.g. "3 unknown material(s); their faces use the object colour"),
+    /// followed by the first cases.
+    pub(crate) fn finish(self, messages: &mut Vec<String>, summary: impl FnOnce(usize) -> String) {
+        if self.count == 0 {
+            return;
+        }
+        let more = self.count - self.examples.len();
+        let mut line = format!("{}: {}", summary(self.count), self.examples.join("; "));
+        if more > 0 {
+            line.push_str(&format!("; and {more} more"));
+        }
+        messages.push(line);
+    }
 }
 
 /// The 1-based line of a byte offset in a text.

@@ -14,12 +14,16 @@
 //! continuations, CRLF line ends. Ignored: `vt`, `vn`, `vp`, `l`, `p`, `s` and every
 //! other statement (curves, surfaces, display attributes).
 //!
+//! A UTF-8 byte-order mark at the start of the file is skipped.
+//!
 //! Errors (naming `file:line`): a malformed number, a non-finite coordinate (NaN,
-//! infinity or an overflowing value), a face with fewer than three vertices, index 0,
+//! infinity or an overflowing value), a coordinate beyond
+//! [`MAX_COORDINATE`](crate::scene::MAX_COORDINATE), a face with fewer than three vertices, index 0,
 //! a relative index reaching before the first vertex, an index beyond the file's
 //! vertices (checked once the whole file is read, so forward references are accepted).
 //! Warnings (in the [`LoadReport`](crate::scene::LoadReport)): an unreadable material
-//! library, an unknown material name.
+//! library, unknown material names (one warning for all of them, with the first few
+//! names and lines).
 //!
 //! Why not `tobj`: it cannot report the line of a bad statement, and every loader
 //! error here must name its file and line.
@@ -32,7 +36,9 @@ use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::{Loaded, file_stem, finish_object, mtl, palette_color};
+use super::{
+    Loaded, Tally, coordinate_out_of_range, file_stem, finish_object, mtl, palette_color, strip_bom,
+};
 use crate::scene::{FaceError, Material, MeshBuilder};
 use crate::{Error, Result};
 use glam::DVec3;
@@ -128,7 +134,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed> {
     };
     let mut material_ids: HashMap<String, u32> = HashMap::new();
     let mut current_material = NO_MATERIAL;
-    let mut lines = bytes.split(|&b| b == b'\n');
+    let mut lines = strip_bom(bytes).split(|&b| b == b'\n');
     let mut line_no = 0usize;
     while let Some(raw) = lines.next() {
         line_no += 1;
@@ -171,6 +177,9 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed> {
                             format!("coordinate \"{}\" is not finite", text(tok)),
                         ));
                     }
+                }
+                if let Some(m) = coordinate_out_of_range(xyz) {
+                    return Err(err(first_line, m));
                 }
                 // w or vertex colours: must be numbers, otherwise unused.
                 for tok in tokens {
@@ -427,7 +436,7 @@ fn build(path: &Path, p: Parsed) -> Result<Loaded> {
 }
 
 /// The colour of each material name used by `usemtl` (`None` when unknown), with a
-/// warning per unreadable library and per unknown name.
+/// warning per unreadable library and one for all unknown names.
 fn resolve_materials(path: &Path, p: &Parsed, warnings: &mut Vec<String>) -> Vec<Option<[f32; 3]>> {
     if p.material_names.is_empty() {
         return Vec::new();
@@ -443,23 +452,25 @@ fn resolve_materials(path: &Path, p: &Parsed, warnings: &mut Vec<String>) -> Vec
                 }
             }
             Err(e) => warnings.push(format!(
-                "{}:{line}: material library not read ({e}); its materials use the object colour",
-                path.display()
+                "line {line}: material library not read ({e}); its materials use the object colour"
             )),
         }
     }
-    p.material_names
+    let mut unknown = Tally::default();
+    let colors = p
+        .material_names
         .iter()
         .zip(&p.material_lines)
         .map(|(name, line)| {
             let color = library.get(name).copied();
             if color.is_none() {
-                warnings.push(format!(
-                    "{}:{line}: unknown material \"{name}\"; its faces use the object colour",
-                    path.display()
-                ));
+                unknown.add(|| format!("\"{name}\" (line {line})"));
             }
             color
         })
-        .collect()
+        .collect();
+    unknown.finish(warnings, |n| {
+        format!("{n} unknown material(s), whose faces use the object colour")
+    });
+    colors
 }

@@ -5,14 +5,18 @@
 //! faces are the `face` elements in file order, over the `vertex` elements' `x`, `y`,
 //! `z` (any numeric type, usually `float` or `double`). Face corners come from the
 //! `vertex_indices` list (or `vertex_index`, its common alternative spelling) of any
-//! integer type. Other properties (normals, colours, texture coordinates) and other
+//! integer type; a face element declaring both lists is refused (which one is meant
+//! is a guess, and reading both would join them into one polygon). Other properties (normals, colours, texture coordinates) and other
 //! elements (edges, materials) are read past and ignored.
 //!
 //! The header is parsed by `ply-rs-bw`; the body is read element by element here, so
 //! every error names the element and its 0-based index (and, in ASCII files, the
-//! line): a non-finite coordinate, a face with fewer than three corners, an index that
+//! line): a non-finite coordinate, a coordinate beyond
+//! [`MAX_COORDINATE`](crate::scene::MAX_COORDINATE), a face with fewer than three corners, an index that
 //! is negative or not below the vertex count, a list of non-integer indices, a body
 //! shorter than the header announces (truncated), a missing `x`/`y`/`z` or index list.
+//!
+//! A UTF-8 byte-order mark before the `ply` magic word is skipped.
 //!
 //! Complexity: O(file size). Source: Greg Turk, "The PLY Polygon File Format" (1994).
 
@@ -25,7 +29,7 @@ use ply_rs_bw::ply::{
     BeginList, ElementDef, Encoding, PropertyAccess, PropertyAccessResult, PropertyType,
 };
 
-use super::{Loaded, file_stem, finish_object, palette_color};
+use super::{Loaded, coordinate_out_of_range, file_stem, finish_object, palette_color, strip_bom};
 use crate::scene::MeshBuilder;
 use crate::{Error, Result};
 
@@ -269,6 +273,7 @@ fn check_unique_names(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// Loads a PLY file from its bytes (`path` names it in messages).
 pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
+    let bytes = strip_bom(bytes);
     let parser = Parser::<Element>::new();
     let mut reader = Reader::new(Cursor::new(bytes));
     let header = parser.read_header(&mut reader).map_err(|e| {
@@ -301,6 +306,14 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
         }
     }
     if let Some(def) = face_def {
+        if def.properties.keys().filter(|k| is_index_list(k)).count() > 1 {
+            return Err(Error::format(
+                path,
+                "face",
+                "the face element has both a vertex_indices and a vertex_index list \
+                 (which one holds the corners is ambiguous)",
+            ));
+        }
         match def.properties.iter().find(|(k, _)| is_index_list(k)) {
             Some((_, p)) if matches!(p.data_type, PropertyType::List(..)) => {}
             Some((k, _)) => {
@@ -351,6 +364,9 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
                             i,
                             format!("non-finite coordinate {:?}", e.xyz),
                         ));
+                    }
+                    if let Some(m) = coordinate_out_of_range(e.xyz) {
+                        return Err(body.error(def, i, m));
                     }
                     positions.push(p);
                 }

@@ -22,6 +22,9 @@
 //! invalid camera. Errors inside a referenced file name that file and its line or
 //! element, plus the referencing line.
 //!
+//! A UTF-8 byte-order mark at the start of the file is skipped (by the TOML parser).
+//! Warnings from a mesh file are given that file's name.
+//!
 //! Complexity: parsing is linear in the file; the cost is that of the referenced
 //! loaders and generators. Source: obscura's own format (TOML 1.0 syntax).
 
@@ -324,6 +327,12 @@ impl SceneReader<'_> {
             report,
             up,
         } = load_objects(&full).map_err(|e| with_reference(e, &reference))?;
+        // The mesh file's warnings do not name it (its caller would); here the caller
+        // is the scene file, so they get the mesh file's name.
+        let mut report = report;
+        for m in &mut report.messages {
+            *m = format!("{}: {m}", full.display());
+        }
         scene.report_mut().merge(&report);
         if objects.iter().all(|o| o.mesh.polygon_count() == 0) {
             scene
