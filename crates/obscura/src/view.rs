@@ -234,8 +234,74 @@ impl ViewTransform {
         }
         let (mut clipped, mut scratch) = (Vec::new(), Vec::new());
         clip_polygon_homogeneous_masked(&input, or, &mut clipped, &mut scratch);
+        self.project_clipped(&clipped, out)
+    }
+
+    /// Projects a polygon the clipper made and appends its screen vertices to `out`,
+    /// less the corners that rounding made (see [`drop_rounding_corners`]); returns
+    /// how many were appended (0 when fewer than three are left).
+    pub(crate) fn project_clipped(
+        &self,
+        clipped: &[ClipEyeVertex],
+        out: &mut Vec<ViewVertex>,
+    ) -> usize {
+        let start = out.len();
         out.extend(clipped.iter().map(|v| self.to_screen(v.clip, v.eye)));
-        clipped.len()
+        drop_rounding_corners(out, start);
+        if out.len() - start < 3 {
+            out.truncate(start);
+        }
+        out.len() - start
+    }
+}
+
+/// Removes from the screen polygon `v[start..]` (made convex by clipping) the vertices
+/// that repeat the previous one and those whose corner turns against the polygon.
+/// Clipping at a corner of the view volume makes both from one vertex: the points where
+/// an edge meets two planes at once differ by rounding, e.g. `(-5.6e-16, 0)` and
+/// `(-5.6e-16, -5.6e-16)` for a corner at `(0, 0)`, and the coverage rule, which takes
+/// the polygon for convex, extended the edge between them, a line of arbitrary
+/// direction, across the polygon: a pixel 0.14 pixel inside a triangle was lost.
+/// Corners that do not turn (collinear vertices) are kept: their edges lie on one line.
+pub(crate) fn drop_rounding_corners(v: &mut Vec<ViewVertex>, start: usize) {
+    let same = |a: &ViewVertex, b: &ViewVertex| a.x == b.x && a.y == b.y;
+    let mut kept = start;
+    for i in start..v.len() {
+        if kept == start || !same(&v[kept - 1], &v[i]) {
+            v.swap(kept, i);
+            kept += 1;
+        }
+    }
+    v.truncate(kept);
+    while v.len() > start + 1 && same(&v[start], &v[v.len() - 1]) {
+        v.pop();
+    }
+    loop {
+        let p = &v[start..];
+        let n = p.len();
+        if n < 3 {
+            return;
+        }
+        let area2: f64 = (0..n)
+            .map(|i| {
+                let (a, b) = (&p[i], &p[(i + 1) % n]);
+                a.x * b.y - b.x * a.y
+            })
+            .sum();
+        if !(area2.is_finite() && area2 != 0.0) {
+            return;
+        }
+        let against = (0..n).find(|&i| {
+            let (a, b, c) = (&p[(i + n - 1) % n], &p[i], &p[(i + 1) % n]);
+            let turn = (b.x - a.x) * (c.y - b.y) - (b.y - a.y) * (c.x - b.x);
+            turn * area2 < 0.0
+        });
+        match against {
+            Some(i) => {
+                v.remove(start + i);
+            }
+            None => return,
+        }
     }
 }
 
@@ -842,14 +908,13 @@ mod reference {
                     }
                 }));
                 clip_polygon_homogeneous_masked(&input, or, &mut out, &mut scratch);
-                if out.is_empty() {
+                let first = vertices.len() as u32;
+                let n = t.project_clipped(&out, &mut vertices) as u32;
+                if n == 0 {
                     continue;
                 }
                 clipped_out += 1;
-                for v in &out {
-                    indices.push(vertices.len() as u32);
-                    vertices.push(t.to_screen(v.clip, v.eye));
-                }
+                indices.extend(first..first + n);
             }
             starts.push(indices.len() as u32);
             faces.push(o.first_face + o.mesh.polygon_face(p as usize));

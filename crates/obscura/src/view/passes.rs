@@ -362,15 +362,13 @@ fn faces_of(
                 }
             }));
             clip_polygon_homogeneous_masked(&s.input, or, &mut s.out, &mut s.scratch);
-            if s.out.is_empty() {
+            let first = new_base + out.clipped_vertices.len() as u32;
+            let n = t.project_clipped(&s.out, &mut out.clipped_vertices) as u32;
+            if n == 0 {
                 continue;
             }
             out.clipped += 1;
-            for v in &s.out {
-                out.indices
-                    .push(new_base + out.clipped_vertices.len() as u32);
-                out.clipped_vertices.push(t.to_screen(v.clip, v.eye));
-            }
+            out.indices.extend(first..first + n);
         }
         out.starts.push(out.indices.len() as u32);
         out.faces.push(o.first_face + mfaces[p]);
