@@ -11,6 +11,7 @@ use obscura::{Result, Scene, prepare};
 use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
+use crate::out::{errln, out, outln};
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -138,7 +139,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             None => scaled_triangles(n, 1),
         }
     };
-    println!(
+    outln!(
         "sweep over {} ({} threads); times in ms of prepare + render; sizes predicted to exceed {} s are skipped",
         base.as_ref()
             .map_or("generated scaled triangles", |l| l.spec.as_str()),
@@ -179,7 +180,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let mut best = match measure() {
                 Ok(t) => t,
                 Err(e) => {
-                    eprintln!("{algorithm} at {n} faces: {e}");
+                    errln!("{algorithm} at {n} faces: {e}");
                     points.push((n, f64::NAN));
                     continue;
                 }
@@ -191,28 +192,28 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 repeats += 1;
             }
             points.push((n, best));
-            eprintln!("  {:<18} {n:>9} faces {best:>10.2} ms", algorithm.name());
+            errln!("  {:<18} {n:>9} faces {best:>10.2} ms", algorithm.name());
         }
     }
-    println!();
-    print!("{:<18}", "algorithm");
+    outln!();
+    out!("{:<18}", "algorithm");
     for n in &sizes {
-        print!(" {n:>9}");
+        out!(" {n:>9}");
     }
-    println!(" {:>8}  seed 000 expects", "exponent");
+    outln!(" {:>8}  seed 000 expects", "exponent");
     let mut doc = Vec::new();
     for (algorithm, points) in &results {
-        print!("{:<18}", algorithm.name());
+        out!("{:<18}", algorithm.name());
         for n in &sizes {
             match points.iter().find(|p| p.0 == *n) {
-                Some((_, t)) if t.is_finite() => print!(" {t:>9.1}"),
-                Some(_) => print!(" {:>9}", "error"),
-                None => print!(" {:>9}", "-"),
+                Some((_, t)) if t.is_finite() => out!(" {t:>9.1}"),
+                Some(_) => out!(" {:>9}", "error"),
+                None => out!(" {:>9}", "-"),
             }
         }
         let valid: Vec<(usize, f64)> = points.iter().copied().filter(|p| p.1.is_finite()).collect();
         let e = growth_exponent(&valid);
-        println!(
+        outln!(
             " {:>8}  {}",
             e.map_or("-".to_string(), |e| format!("{e:.2}")),
             expected(*algorithm)

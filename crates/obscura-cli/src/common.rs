@@ -2,6 +2,7 @@
 
 use std::time::Instant;
 
+use crate::out::errln;
 use clap::Args;
 use glam::DVec3;
 use obscura::accel::bsp::{BspOptions, BspTraversal};
@@ -141,7 +142,7 @@ impl ViewArgs {
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         scene.ensure_not_empty(&spec)?;
         for w in scene.report().warnings() {
-            eprintln!("warning: {spec}: {w}");
+            errln!("warning: {spec}: {w}");
         }
         Ok(Loaded {
             spec,

@@ -12,6 +12,7 @@ use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
 use crate::grid;
+use crate::out::outln;
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -137,7 +138,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         }
     };
     let pixels = viewport.pixel_count() as f64;
-    println!(
+    outln!(
         "{} at {}x{}: {} faces, {} triangles",
         loaded.spec,
         viewport.width,
@@ -145,9 +146,12 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         scene.face_count(),
         scene.triangle_count()
     );
-    println!(
+    outln!(
         "{:<18} {:>10} {:>10} {:>9}  structure",
-        "algorithm", "time ms", "differ", "agree %"
+        "algorithm",
+        "time ms",
+        "differ",
+        "agree %"
     );
     let mut tiles = Vec::new();
     let mut table = Vec::new();
@@ -156,7 +160,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             Ok((frame, stats, ms)) => {
                 let differ = frame.differences(&reference).len();
                 let agree = 100.0 * (1.0 - differ as f64 / pixels);
-                println!(
+                outln!(
                     "{:<18} {:>10.2} {:>10} {:>9.3}  {}",
                     row.algorithm.name(),
                     ms,
@@ -174,7 +178,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 }));
             }
             Err(e) => {
-                println!(
+                outln!(
                     "{:<18} {:>10} {:>10} {:>9}  error: {e}",
                     row.algorithm.name(),
                     "-",
@@ -186,7 +190,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         }
     }
     grid::compose(&tiles, tiles.len().clamp(1, 4)).write_png(&args.output)?;
-    println!(
+    outln!(
         "wrote {} (each algorithm's picture and its differences from the z-buffer in red)",
         args.output.display()
     );

@@ -9,6 +9,7 @@ use obscura::{Result, prepare};
 use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
+use crate::out::outln;
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -94,7 +95,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
 
     if args.stats {
-        println!(
+        outln!(
             "scene {} : {} objects, {} faces, {} triangles; loaded in {:.1} ms",
             loaded.spec,
             scene.objects().len(),
@@ -102,18 +103,26 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             scene.triangle_count(),
             loaded.load_ms
         );
-        println!(
+        outln!(
             "{:<48} {:>9} {:>12} {:>12} {:>9}",
-            "stage", "unit", "in", "out", "ms"
+            "stage",
+            "unit",
+            "in",
+            "out",
+            "ms"
         );
         for s in &stages.stages {
-            println!(
+            outln!(
                 "{:<48} {:>9} {:>12} {:>12} {:>9.2}",
-                s.stage, s.unit, s.input, s.output, s.ms
+                s.stage,
+                s.unit,
+                s.input,
+                s.output,
+                s.ms
             );
         }
         let algo_ms = stats.get("time_ms").unwrap_or(0.0);
-        println!(
+        outln!(
             "{:<48} {:>9} {:>12} {:>12} {:>9.2}",
             format!("visibility: {}", args.algo),
             "pixels",
@@ -123,10 +132,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         );
         for (k, v) in &stats.entries {
             if k != "time_ms" {
-                println!("  {k:<46} {v:>12}");
+                outln!("  {k:<46} {v:>12}");
             }
         }
-        println!(
+        outln!(
             "render_ms {render_ms:.2} (prepare {prepare_ms:.2}, {} {algo_ms:.2})",
             args.algo
         );
@@ -152,7 +161,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let text = serde_json::to_string_pretty(&doc).expect("JSON of plain values");
         std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
     }
-    println!(
+    outln!(
         "wrote {} ({}x{}, {}, {:.1} ms)",
         args.output.display(),
         viewport.width,

@@ -188,3 +188,43 @@ fn compare_writes_a_grid_and_a_table() {
     assert!(json.contains("\"differing_pixels\": 0"), "{json}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Runs the binary with its standard output a pipe whose reading end is already
+/// closed, as in `obscura ... | head -0`.
+fn obscura_into_closed_pipe(args: &[&str], dir: &PathBuf) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_obscura"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    drop(child.stdout.take());
+    child.wait_with_output().expect("the binary ends")
+}
+
+#[test]
+fn a_closed_standard_output_ends_the_program_quietly() {
+    let dir = tempdir("pipe");
+    let cases: [&[&str]; 3] = [
+        &["render", "demo:cube", "--size", "8x8", "-o", "r.png"],
+        &[
+            "compare",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "--algos",
+            "zbuffer,bsp",
+        ],
+        &["bench", "--max-faces", "300", "--algos", "zbuffer"],
+    ];
+    for args in cases {
+        let o = obscura_into_closed_pipe(args, &dir);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+    }
+    // The work before the report was done.
+    assert!(dir.join("r.png").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
