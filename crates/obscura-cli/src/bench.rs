@@ -12,6 +12,7 @@ use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
 use crate::out::{errln, out, outln};
+use crate::outputs::Outputs;
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -113,6 +114,10 @@ fn growth_exponent(points: &[(usize, f64)]) -> Option<f64> {
 }
 
 pub fn run(args: &BenchArgs) -> Result<()> {
+    let mut outputs = Outputs::stage(
+        args.view.scene.as_deref(),
+        &[("--json", args.json.as_deref())],
+    )?;
     let base = match &args.view.scene {
         Some(_) => Some(args.view.load()?),
         None => None,
@@ -195,26 +200,26 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             errln!("  {:<18} {n:>9} faces {best:>10.2} ms", algorithm.name());
         }
     }
-    outln!();
-    out!("{:<18}", "algorithm");
+    // The table is printed once the JSON is in place: a closed pipe may cut it short.
+    let mut table = format!("\n{:<18}", "algorithm");
     for n in &sizes {
-        out!(" {n:>9}");
+        table += &format!(" {n:>9}");
     }
-    outln!(" {:>8}  seed 000 expects", "exponent");
+    table += &format!(" {:>8}  seed 000 expects\n", "exponent");
     let mut doc = Vec::new();
     for (algorithm, points) in &results {
-        out!("{:<18}", algorithm.name());
+        table += &format!("{:<18}", algorithm.name());
         for n in &sizes {
-            match points.iter().find(|p| p.0 == *n) {
-                Some((_, t)) if t.is_finite() => out!(" {t:>9.1}"),
-                Some(_) => out!(" {:>9}", "error"),
-                None => out!(" {:>9}", "-"),
-            }
+            table += &match points.iter().find(|p| p.0 == *n) {
+                Some((_, t)) if t.is_finite() => format!(" {t:>9.1}"),
+                Some(_) => format!(" {:>9}", "error"),
+                None => format!(" {:>9}", "-"),
+            };
         }
         let valid: Vec<(usize, f64)> = points.iter().copied().filter(|p| p.1.is_finite()).collect();
         let e = growth_exponent(&valid);
-        outln!(
-            " {:>8}  {}",
+        table += &format!(
+            " {:>8}  {}\n",
             e.map_or("-".to_string(), |e| format!("{e:.2}")),
             expected(*algorithm)
         );
@@ -224,11 +229,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "exponent": e,
         }));
     }
-    if let Some(p) = &args.json {
+    if args.json.is_some() {
         let text = serde_json::to_string_pretty(&json!({ "sizes": sizes, "algorithms": doc }))
             .expect("plain JSON");
-        std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
+        outputs.write("--json", |p| {
+            std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))
+        })?;
     }
+    outputs.commit()?;
+    out!("{table}");
     Ok(())
 }
 

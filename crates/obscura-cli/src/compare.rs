@@ -12,7 +12,8 @@ use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
 use crate::grid;
-use crate::out::outln;
+use crate::out::out;
+use crate::outputs::Outputs;
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -96,6 +97,10 @@ fn progress_bar(name: &str) -> ProgressBar {
 }
 
 pub fn run(args: &CompareArgs) -> Result<()> {
+    let mut outputs = Outputs::stage(
+        args.view.scene.as_deref(),
+        &[("-o", Some(&args.output)), ("--json", args.json.as_deref())],
+    )?;
     let loaded = args.view.load()?;
     let scene = &loaded.scene;
     let viewport = args.view.viewport_or(scene, (480, 270))?;
@@ -129,7 +134,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     })??;
 
     let reference = match &rows[0].result {
-        Ok((f, _, _)) => f.clone(),
+        Ok((f, _, _)) => f,
         Err(e) => {
             return Err(obscura::Error::option(
                 "--algos",
@@ -138,30 +143,28 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         }
     };
     let pixels = viewport.pixel_count() as f64;
-    outln!(
-        "{} at {}x{}: {} faces, {} triangles",
+    // The table is printed once the files are in place: a closed pipe may cut it short.
+    let mut report = format!(
+        "{} at {}x{}: {} faces, {} triangles\n",
         loaded.spec,
         viewport.width,
         viewport.height,
         scene.face_count(),
         scene.triangle_count()
     );
-    outln!(
-        "{:<18} {:>10} {:>10} {:>9}  structure",
-        "algorithm",
-        "time ms",
-        "differ",
-        "agree %"
+    report += &format!(
+        "{:<18} {:>10} {:>10} {:>9}  structure\n",
+        "algorithm", "time ms", "differ", "agree %"
     );
     let mut tiles = Vec::new();
     let mut table = Vec::new();
     for row in &rows {
         match &row.result {
             Ok((frame, stats, ms)) => {
-                let differ = frame.differences(&reference).len();
+                let differ = frame.differences(reference).len();
                 let agree = 100.0 * (1.0 - differ as f64 / pixels);
-                outln!(
-                    "{:<18} {:>10.2} {:>10} {:>9.3}  {}",
+                report += &format!(
+                    "{:<18} {:>10.2} {:>10} {:>9.3}  {}\n",
                     row.algorithm.name(),
                     ms,
                     differ,
@@ -169,7 +172,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                     summary(stats)
                 );
                 let picture = frame.shade(scene, &camera);
-                let mask = difference_mask(&picture, frame, &reference);
+                let mask = difference_mask(&picture, frame, reference);
                 tiles.push((row.algorithm.name().to_string(), picture));
                 tiles.push((format!("{} diff: {differ} px", row.algorithm.name()), mask));
                 table.push(json!({
@@ -178,8 +181,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 }));
             }
             Err(e) => {
-                outln!(
-                    "{:<18} {:>10} {:>10} {:>9}  error: {e}",
+                report += &format!(
+                    "{:<18} {:>10} {:>10} {:>9}  error: {e}\n",
                     row.algorithm.name(),
                     "-",
                     "-",
@@ -189,18 +192,22 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             }
         }
     }
-    grid::compose(&tiles, tiles.len().clamp(1, 4)).write_png(&args.output)?;
-    outln!(
-        "wrote {} (each algorithm's picture and its differences from the z-buffer in red)",
-        args.output.display()
-    );
-    if let Some(p) = &args.json {
+    let grid = grid::compose(&tiles, tiles.len().clamp(1, 4));
+    outputs.write("-o", |p| grid.write_png(p))?;
+    if args.json.is_some() {
         let doc = json!({
             "scene": loaded.spec, "width": viewport.width, "height": viewport.height,
             "load_ms": loaded.load_ms, "algorithms": table,
         });
         let text = serde_json::to_string_pretty(&doc).expect("JSON of plain values");
-        std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
+        outputs.write("--json", |p| {
+            std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))
+        })?;
     }
+    outputs.commit()?;
+    out!(
+        "{report}wrote {} (each algorithm's picture and its differences from the z-buffer in red)\n",
+        args.output.display()
+    );
     Ok(())
 }

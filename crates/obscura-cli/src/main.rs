@@ -5,6 +5,7 @@ mod common;
 mod compare;
 mod grid;
 mod out;
+mod outputs;
 mod render;
 
 use std::process::ExitCode;

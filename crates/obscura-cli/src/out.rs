@@ -4,7 +4,7 @@
 //! `BrokenPipe`, on which `println!` panics. The report goes through [`outln!`] and
 //! [`out!`] instead: a closed standard output ends the program quietly with status 0, as
 //! most Unix tools do when their reader has gone; any other write error ends it with an
-//! error message and status 1. Messages to standard error go through [`errln!`], which
+//! error message and status 1. Either way, output files not yet complete are discarded. Messages to standard error go through [`errln!`], which
 //! drops them if standard error itself is closed (there is nobody left to tell).
 
 use std::io::Write;
@@ -24,6 +24,7 @@ pub fn stderr(args: std::fmt::Arguments<'_>) {
 
 /// Ends the program after standard output failed.
 fn failed(e: &std::io::Error) -> ! {
+    crate::outputs::discard_pending();
     if e.kind() == std::io::ErrorKind::BrokenPipe {
         std::process::exit(0);
     }

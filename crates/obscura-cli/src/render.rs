@@ -10,6 +10,7 @@ use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
 use crate::out::outln;
+use crate::outputs::Outputs;
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -65,6 +66,15 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
+    let mut outputs = Outputs::stage(
+        args.view.scene.as_deref(),
+        &[
+            ("-o", Some(&args.output)),
+            ("--ids", args.ids.as_deref()),
+            ("--depth", args.depth.as_deref()),
+            ("--stats-json", args.stats_json.as_deref()),
+        ],
+    )?;
     let loaded = args.view.load()?;
     let scene = &loaded.scene;
     let viewport = args.view.viewport(scene)?;
@@ -86,13 +96,38 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         ImageView::Shaded => frame.shade(scene, &camera),
         ImageView::Ids => frame.id_false_colour(),
     };
-    image.write_png(&args.output)?;
-    if let Some(p) = &args.ids {
-        frame.write_ids_npy(p)?;
+    outputs.write("-o", |p| image.write_png(p))?;
+    if args.ids.is_some() {
+        outputs.write("--ids", |p| frame.write_ids_npy(p))?;
     }
-    if let Some(p) = &args.depth {
-        frame.write_depth_npy(p)?;
+    if args.depth.is_some() {
+        outputs.write("--depth", |p| frame.write_depth_npy(p))?;
     }
+    if args.stats_json.is_some() {
+        let doc = json!({
+            "scene": loaded.spec,
+            "algorithm": args.algo.name(),
+            "width": viewport.width,
+            "height": viewport.height,
+            "threads": if threads == 0 { rayon::current_num_threads() } else { threads },
+            "objects": scene.objects().len(),
+            "faces": scene.face_count(),
+            "triangles": scene.triangle_count(),
+            "load_ms": loaded.load_ms,
+            "render_ms": render_ms,
+            "prepare_ms": prepare_ms,
+            "algorithm_ms": stats.get("time_ms"),
+            "covered_pixels": frame.covered_pixels(),
+            "stages": stages.stages,
+            "stats": stats,
+        });
+        let text = serde_json::to_string_pretty(&doc).expect("JSON of plain values");
+        outputs.write("--stats-json", |p| {
+            std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))
+        })?;
+    }
+    // Every file is in place before the report, which a closed pipe may cut short.
+    outputs.commit()?;
 
     if args.stats {
         outln!(
@@ -139,27 +174,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "render_ms {render_ms:.2} (prepare {prepare_ms:.2}, {} {algo_ms:.2})",
             args.algo
         );
-    }
-    if let Some(p) = &args.stats_json {
-        let doc = json!({
-            "scene": loaded.spec,
-            "algorithm": args.algo.name(),
-            "width": viewport.width,
-            "height": viewport.height,
-            "threads": if threads == 0 { rayon::current_num_threads() } else { threads },
-            "objects": scene.objects().len(),
-            "faces": scene.face_count(),
-            "triangles": scene.triangle_count(),
-            "load_ms": loaded.load_ms,
-            "render_ms": render_ms,
-            "prepare_ms": prepare_ms,
-            "algorithm_ms": stats.get("time_ms"),
-            "covered_pixels": frame.covered_pixels(),
-            "stages": stages.stages,
-            "stats": stats,
-        });
-        let text = serde_json::to_string_pretty(&doc).expect("JSON of plain values");
-        std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
     }
     outln!(
         "wrote {} ({}x{}, {}, {:.1} ms)",

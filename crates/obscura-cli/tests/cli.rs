@@ -228,3 +228,100 @@ fn a_closed_standard_output_ends_the_program_quietly() {
     assert!(dir.join("r.png").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The names of the files in `dir`, sorted.
+fn listing(dir: &PathBuf) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn outputs_that_collide_or_cannot_be_written_are_refused_before_any_file_is_touched() {
+    let dir = tempdir("outputs");
+    let mesh = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::fs::write(dir.join("victim.obj"), mesh).unwrap();
+    let cases: [(&[&str], &[&str]); 6] = [
+        (
+            &["render", "demo:cube", "-o", "same.png", "--ids", "same.png"],
+            &["--ids", "same file as -o"],
+        ),
+        (
+            &[
+                "render",
+                "demo:cube",
+                "--ids",
+                "x.npy",
+                "--depth",
+                "./x.npy",
+            ],
+            &["--depth", "same file as --ids"],
+        ),
+        (
+            &["render", "victim.obj", "-o", "victim.obj"],
+            &["-o", "input scene"],
+        ),
+        (
+            &["render", "victim.obj", "--ids", "./victim.obj"],
+            &["--ids", "input scene"],
+        ),
+        (
+            &["compare", "demo:cube", "-o", "c.png", "--json", "c.png"],
+            &["--json", "same file as -o"],
+        ),
+        (
+            &[
+                "render",
+                "demo:cube",
+                "-o",
+                "x3.png",
+                "--ids",
+                "x3_ids.npy",
+                "--stats-json",
+                "missing-dir/s.json",
+            ],
+            &["missing-dir/s.json"],
+        ),
+    ];
+    for (args, expected) in cases {
+        let o = obscura(args, &dir);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {t}");
+        for e in expected {
+            assert!(t.contains(e), "{args:?}: expected {e:?} in {t}");
+        }
+        // Nothing written, nothing left behind, the input intact.
+        assert_eq!(listing(&dir), ["victim.obj"], "{args:?}");
+        assert_eq!(
+            std::fs::read_to_string(dir.join("victim.obj")).unwrap(),
+            mesh
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn outputs_replace_existing_files_and_leave_no_temporary_files() {
+    let dir = tempdir("replace");
+    std::fs::write(dir.join("r.png"), "old").unwrap();
+    let o = obscura(
+        &[
+            "render",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "-o",
+            "r.png",
+            "--stats-json",
+            "s.json",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(listing(&dir), ["r.png", "s.json"]);
+    assert_eq!(&std::fs::read(dir.join("r.png")).unwrap()[1..4], b"PNG");
+    std::fs::remove_dir_all(&dir).ok();
+}
