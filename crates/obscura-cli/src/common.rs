@@ -45,8 +45,8 @@ pub struct ViewArgs {
     /// Keep back faces (by default they are culled on closed objects).
     #[arg(long)]
     pub no_backface: bool,
-    /// Worker threads (default: all cores; 1 for single-thread figures).
-    #[arg(long, value_name = "N")]
+    /// Worker threads, at most 1024 (default: all cores; 1 for single-thread figures).
+    #[arg(long, value_name = "N", value_parser = parse_threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
 }
 
@@ -85,6 +85,24 @@ pub fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {
 
 pub fn parse_bsp_traversal(s: &str) -> std::result::Result<BspTraversal, String> {
     s.parse().map_err(|e: obscura::Error| e.to_string())
+}
+
+/// The most worker threads `--threads` accepts: far more than any machine's cores (a
+/// pool of 100,000 threads takes minutes just to start).
+pub const MAX_THREADS: usize = 1024;
+
+pub fn parse_threads(s: &str) -> std::result::Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a whole number of threads"))?;
+    if n > MAX_THREADS {
+        return Err(format!(
+            "{n} threads: at most {MAX_THREADS} (this machine has {} cores)",
+            std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
+        ));
+    }
+    Ok(n)
 }
 
 /// The default image size.

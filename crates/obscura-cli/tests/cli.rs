@@ -325,3 +325,72 @@ fn outputs_replace_existing_files_and_leave_no_temporary_files() {
     assert_eq!(&std::fs::read(dir.join("r.png")).unwrap()[1..4], b"PNG");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Runs the binary, killing it (and failing) if it takes more than `seconds`.
+fn obscura_within(args: &[&str], dir: &PathBuf, seconds: u64) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_obscura"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed().as_secs() >= seconds {
+            child.kill().ok();
+            child.wait().ok();
+            panic!("{args:?} still running after {seconds} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// Runs each case within 20 s and checks it fails with status 2 (a usage error) or 1,
+/// with each expected text and no panic.
+fn refused(dir: &PathBuf, cases: &[(&[&str], &[&str])]) {
+    for (args, expected) in cases {
+        let o = obscura_within(args, dir, 20);
+        let t = text(&o);
+        assert!(
+            matches!(o.status.code(), Some(1 | 2)),
+            "{args:?} should be refused: {:?} {t}",
+            o.status
+        );
+        assert!(!t.contains("panicked"), "{args:?}: {t}");
+        for e in *expected {
+            assert!(t.contains(e), "{args:?}: expected {e:?} in {t}");
+        }
+    }
+}
+
+#[test]
+fn thread_counts_beyond_the_limit_are_refused() {
+    let dir = tempdir("threads");
+    refused(
+        &dir,
+        &[
+            (
+                &[
+                    "render",
+                    "demo:cube",
+                    "--size",
+                    "8x8",
+                    "--threads",
+                    "100000",
+                ],
+                &["--threads", "at most 1024"],
+            ),
+            (
+                &["compare", "demo:cube", "--threads", "18446744073709551615"],
+                &["--threads", "at most 1024"],
+            ),
+            (
+                &["render", "demo:cube", "--threads", "-1"],
+                &["--threads", "\"-1\" is not a whole number"],
+            ),
+        ],
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
