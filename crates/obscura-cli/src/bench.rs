@@ -31,17 +31,63 @@ pub struct BenchArgs {
     /// Comma-separated algorithms (default: all).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::common::parse_algo)]
     pub algos: Option<Vec<Algorithm>>,
-    /// The largest face count of the sweep.
-    #[arg(long, default_value_t = 1_000_000)]
+    /// The largest face count of the sweep, 1 to 10,000,000.
+    #[arg(long, default_value_t = 1_000_000, value_parser = parse_max_faces, allow_negative_numbers = true)]
     pub max_faces: usize,
-    /// Seconds an algorithm may take for one size; sizes predicted to take longer are skipped.
-    #[arg(long, default_value_t = 60.0)]
+    /// Seconds an algorithm may take for one size (a positive number); sizes predicted to
+    /// take longer are skipped.
+    #[arg(long, default_value_t = 60.0, value_parser = parse_budget, allow_negative_numbers = true)]
     pub budget: f64,
     #[command(flatten)]
     pub tuning: AlgoArgs,
     /// Also write the results as JSON.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+}
+
+/// The largest `--max-faces`: ten times the default sweep. A generated scene, its
+/// prepared view and the z-buffer take about 300 bytes a face (3 GB at this maximum),
+/// and several algorithms need many times that, so beyond it a sweep would run out of
+/// memory (a billion faces asked for 72 GB before any check) or time.
+pub const MAX_FACES: usize = 10_000_000;
+
+fn parse_max_faces(s: &str) -> std::result::Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a whole number of faces"))?;
+    if !(1..=MAX_FACES).contains(&n) {
+        return Err(format!("{n} faces: give 1 to {MAX_FACES}"));
+    }
+    Ok(n)
+}
+
+fn parse_budget(s: &str) -> std::result::Result<f64, String> {
+    let t: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a number of seconds"))?;
+    if !(t.is_finite() && t > 0.0) {
+        return Err(format!(
+            "{s} s: the budget must be a positive number of seconds"
+        ));
+    }
+    Ok(t)
+}
+
+/// Whether an algorithm with these measured `(faces, ms)` points is still run at `n`
+/// faces: not after an error, nor when the time predicted from the last two points (or
+/// quadratic growth from one) exceeds the budget.
+fn worth_running(points: &[(usize, f64)], n: usize, budget_s: f64) -> bool {
+    let predicted = match points {
+        [.., (n0, t0), (n1, t1)] if *t0 > 0.0 && *t1 > 0.0 => {
+            let e = ((t1 / t0).ln() / (*n1 as f64 / *n0 as f64).ln()).clamp(0.0, 3.0);
+            t1 * (n as f64 / *n1 as f64).powf(e)
+        }
+        [.., (n1, t1)] => t1 * (n as f64 / *n1 as f64).powi(2),
+        [] => 0.0,
+    };
+    predicted <= budget_s * 1e3 && !points.last().is_some_and(|p| p.1.is_nan())
 }
 
 /// What the seeds' table predicts for the exponent in P (faces) at a fixed image size.
@@ -133,10 +179,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     .filter(|&n| n < max)
     .collect();
     sizes.push(max);
-    let algos = args
+    let mut algos = args
         .algos
         .clone()
         .unwrap_or_else(|| Algorithm::ALL.to_vec());
+    let mut seen = Vec::new();
+    algos.retain(|a| {
+        let first = !seen.contains(a);
+        seen.push(*a);
+        first
+    });
     let scene_for = |n: usize| -> Scene {
         match &base {
             Some(l) if n >= l.scene.polygon_count() => l.scene.clone(),
@@ -157,21 +209,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         algos.iter().map(|&a| (a, Vec::new())).collect();
     let options = args.tuning.options();
     for &n in &sizes {
+        // No scene is built for a size that every algorithm skips.
+        if !results
+            .iter()
+            .any(|(_, points)| worth_running(points, n, args.budget))
+        {
+            continue;
+        }
         let scene = scene_for(n);
         let viewport = args.view.viewport_or(&scene, (640, 360))?;
         let camera = args.view.camera(&scene, viewport)?;
         let prep = args.view.prepare_options();
         for (algorithm, points) in &mut results {
-            // Predict from the last two points (or assume quadratic growth from one).
-            let predicted = match points.as_slice() {
-                [.., (n0, t0), (n1, t1)] if *t0 > 0.0 && *t1 > 0.0 => {
-                    let e = ((t1 / t0).ln() / (*n1 as f64 / *n0 as f64).ln()).clamp(0.0, 3.0);
-                    t1 * (n as f64 / *n1 as f64).powf(e)
-                }
-                [.., (n1, t1)] => t1 * (n as f64 / *n1 as f64).powi(2),
-                [] => 0.0,
-            };
-            if predicted > args.budget * 1e3 || points.last().is_some_and(|p| p.1.is_nan()) {
+            if !worth_running(points, n, args.budget) {
                 continue;
             }
             let measure = || {

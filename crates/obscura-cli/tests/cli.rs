@@ -394,3 +394,57 @@ fn thread_counts_beyond_the_limit_are_refused() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn bench_refuses_meaningless_budgets_and_face_counts() {
+    let dir = tempdir("bench-args");
+    let zb = ["bench", "--algos", "zbuffer", "--max-faces"];
+    let with = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = zb.to_vec();
+        v.extend_from_slice(extra);
+        v
+    };
+    let cases = [
+        (with(&["1000", "--budget=-5"]), "positive number of seconds"),
+        (
+            with(&["1000", "--budget", "-5"]),
+            "positive number of seconds",
+        ),
+        (
+            with(&["1000", "--budget", "NaN"]),
+            "positive number of seconds",
+        ),
+        (
+            with(&["1000", "--budget", "0"]),
+            "positive number of seconds",
+        ),
+        (with(&["0"]), "give 1 to 10000000"),
+        (with(&["-3"]), "not a whole number of faces"),
+        (
+            with(&["1000000000", "--budget", "0.001"]),
+            "give 1 to 10000000",
+        ),
+    ];
+    for (args, expected) in &cases {
+        refused(&dir, &[(args.as_slice(), &[expected])]);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bench_runs_each_algorithm_once() {
+    let dir = tempdir("bench-dup");
+    let o = obscura_within(
+        &["bench", "--max-faces", "200", "--algos", "zbuffer,zbuffer"],
+        &dir,
+        60,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("zbuffer")).count(),
+        1,
+        "{table}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
