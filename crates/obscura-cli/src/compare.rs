@@ -6,8 +6,9 @@ use std::time::Instant;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use obscura::frame::{available_memory, check_frames_fit};
 use obscura::surface::{Algorithm, Stats, render};
-use obscura::{Frame, Result, RgbImage, prepare};
+use obscura::{Frame, Result, RgbImage, Viewport, prepare};
 use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
@@ -84,6 +85,28 @@ fn difference_mask(picture: &RgbImage, frame: &Frame, reference: &Frame) -> RgbI
     out
 }
 
+/// Frames' worth of memory (a frame and its shaded image, 11 bytes a pixel) that
+/// comparing `algorithms` holds at its peak: each algorithm's frame (8 bytes a pixel),
+/// picture and difference mask (3 each) and their two tiles in the grid (6), plus one
+/// for the algorithm being run.
+fn frames_held(algorithms: usize) -> u64 {
+    2 * algorithms as u64 + 1
+}
+
+/// Refuses a comparison whose frames would not fit in `available` bytes, before any
+/// rendering (it aborted allocating after minutes at 16384x16384).
+fn check_memory(viewport: Viewport, algorithms: usize, available: Option<u64>) -> Result<()> {
+    check_frames_fit(viewport, frames_held(algorithms), available).map_err(|e| {
+        obscura::Error::option(
+            "--size",
+            format!(
+                "{e}: compare keeps the frame, picture and difference mask of each of its \
+                 {algorithms} algorithms; try a smaller --size or fewer --algos"
+            ),
+        )
+    })
+}
+
 fn progress_bar(name: &str) -> ProgressBar {
     let pb = ProgressBar::new(1000);
     pb.set_style(
@@ -110,8 +133,14 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         .algos
         .clone()
         .unwrap_or_else(|| Algorithm::ALL.to_vec());
-    algos.retain(|&a| a != Algorithm::ZBuffer);
     algos.insert(0, Algorithm::ZBuffer);
+    let mut seen = Vec::new();
+    algos.retain(|a| {
+        let first = !seen.contains(a);
+        seen.push(*a);
+        first
+    });
+    check_memory(viewport, algos.len(), available_memory())?;
 
     let rows = args.view.with_threads(|| {
         let view = prepare(scene, &camera, viewport, &prep)?;
@@ -210,4 +239,25 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         args.output.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn comparisons_larger_than_memory_are_refused_naming_the_size() {
+        let big = Viewport::new(16384, 16384).unwrap();
+        let e = check_memory(big, 11, Some(16 << 30))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--size") && e.contains("16384x16384") && e.contains("23 frames"),
+            "{e}"
+        );
+        // One algorithm's frames fit where eleven do not.
+        assert!(check_memory(big, 1, Some(16 << 30)).is_ok());
+        assert!(check_memory(Viewport::new(480, 270).unwrap(), 11, Some(1 << 30)).is_ok());
+        assert!(check_memory(big, 11, None).is_ok());
+    }
 }

@@ -448,3 +448,59 @@ fn bench_runs_each_algorithm_once() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `MemAvailable` in bytes, where the system says.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    Some(line.split_whitespace().nth(1)?.parse::<u64>().ok()? * 1024)
+}
+
+#[test]
+fn compare_refuses_up_front_a_size_whose_frames_cannot_fit() {
+    // Every algorithm at the largest size holds 23 frames of 2.75 GiB: more than any
+    // machine this runs on, unless it has over 64 GiB free.
+    if available_memory().is_none_or(|m| m > 64 << 30) {
+        eprintln!("skipped: available memory unknown or above 64 GiB");
+        return;
+    }
+    let dir = tempdir("compare-memory");
+    refused(
+        &dir,
+        &[(
+            &["compare", "demo:cube", "--size", "16384x16384"],
+            &["--size", "16384x16384", "23 frames need", "fewer --algos"],
+        )],
+    );
+    assert_eq!(listing(&dir), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn compare_runs_each_algorithm_once() {
+    let dir = tempdir("compare-dup");
+    let o = obscura(
+        &[
+            "compare",
+            "demo:cube",
+            "--size",
+            "16x16",
+            "--algos",
+            "bsp,bsp,zbuffer",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("bsp ")).count(),
+        1,
+        "{table}"
+    );
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("zbuffer ")).count(),
+        1,
+        "{table}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
