@@ -31,16 +31,16 @@ pub struct ViewArgs {
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
     pub up: Option<DVec3>,
     /// Vertical field of view in degrees (perspective).
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub fov: Option<f64>,
     /// Near clipping distance (default: fitted to the scene).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub near: Option<f64>,
     /// Far clipping distance (default: fitted to the scene).
-    #[arg(long, value_name = "F")]
+    #[arg(long, value_name = "F", allow_negative_numbers = true)]
     pub far: Option<f64>,
     /// Orthographic projection showing this height of the world.
-    #[arg(long, value_name = "HEIGHT")]
+    #[arg(long, value_name = "HEIGHT", allow_negative_numbers = true)]
     pub ortho: Option<f64>,
     /// Keep back faces (by default they are culled on closed objects).
     #[arg(long)]
@@ -56,8 +56,12 @@ pub struct AlgoArgs {
     /// Bounding volume for raycast-bounds: sphere, aabb, obb, kdop.
     #[arg(long, default_value = "aabb", value_parser = parse_bounds)]
     pub bounds: BoundsKind,
-    /// Octree depth for the octree algorithm: voxels are 2^DEPTH on a side (at most 10).
-    #[arg(long, value_name = "DEPTH", default_value_t = 7)]
+    /// Octree depth for the octree algorithm: voxels are 2^DEPTH on a side (0 to 10).
+    /// Each level multiplies the octree's memory and build time by about 4: depth 8 on
+    /// the 1M-triangle demo:sphere takes 12 MB, but depth 10 on a scene of many large
+    /// overlapping triangles (demo:triangles) takes minutes and over 5 GB.
+    #[arg(long, value_name = "DEPTH", default_value_t = 7, value_parser = parse_octree_depth,
+          allow_negative_numbers = true)]
     pub octree_depth: u32,
     /// BSP traversal: front-to-back (write each pixel once, stop when the image is
     /// full) or back-to-front (the painter's algorithm).
@@ -77,6 +81,19 @@ impl AlgoArgs {
 
 pub fn parse_algo(s: &str) -> std::result::Result<Algorithm, String> {
     s.parse().map_err(|e: obscura::Error| e.to_string())
+}
+
+/// The same check for every subcommand, at parsing: `compare` and `bench` only reported
+/// a bad depth as one algorithm's error and ended with status 0.
+pub fn parse_octree_depth(s: &str) -> std::result::Result<u32, String> {
+    let max = obscura::accel::octree::MAX_DEPTH;
+    match s.trim().parse::<u32>() {
+        Ok(d) if d <= max => Ok(d),
+        _ => Err(format!(
+            "\"{s}\": give a whole number from 0 to {max} ({} voxels on a side)",
+            1u32 << max
+        )),
+    }
 }
 
 pub fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {

@@ -504,3 +504,54 @@ fn compare_runs_each_algorithm_once() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn octree_depth_is_checked_by_every_subcommand() {
+    let dir = tempdir("octree-depth");
+    let expected: &[&str] = &["--octree-depth", "from 0 to 10"];
+    refused(
+        &dir,
+        &[
+            (&["render", "demo:cube", "--octree-depth", "11"], expected),
+            (&["compare", "demo:cube", "--octree-depth", "11"], expected),
+            (
+                &["bench", "--algos", "octree,zbuffer", "--octree-depth", "11"],
+                expected,
+            ),
+            (&["compare", "demo:cube", "--octree-depth", "-1"], expected),
+        ],
+    );
+    assert_eq!(listing(&dir), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn negative_values_reach_the_checks_that_name_them() {
+    let dir = tempdir("negative");
+    refused(
+        &dir,
+        &[
+            (
+                &["render", "demo:cube", "--fov", "-10"],
+                &["-10", "(0, 180)"],
+            ),
+            (&["render", "demo:cube", "--ortho", "-1"], &["-1"]),
+        ],
+    );
+    // A negative near is valid for an orthographic view.
+    let o = obscura(
+        &[
+            "render",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "--ortho",
+            "4",
+            "--near",
+            "-1",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    std::fs::remove_dir_all(&dir).ok();
+}
