@@ -4,6 +4,7 @@ use std::time::Instant;
 
 use crate::out::errln;
 use clap::Args;
+use clap::builder::TypedValueParser;
 use glam::DVec3;
 use obscura::accel::bsp::{BspOptions, BspTraversal};
 use obscura::cull::backface::BackfaceMode;
@@ -16,7 +17,7 @@ use obscura::{Camera, Error, PrepareOptions, Projection, Result, Scene, Viewport
 pub struct ViewArgs {
     /// A mesh file (.obj .gltf .glb .stl .ply), a scene file (.toml) or demo:NAME
     /// (default, seed-task, cube, sphere, city, triangles). Without it, demo:default.
-    #[arg(value_name = "SCENE")]
+    #[arg(value_name = "SCENE", value_parser = clap::builder::OsStringValueParser::new().try_map(parse_scene))]
     pub scene: Option<String>,
     /// Image size in pixels, WIDTHxHEIGHT (each side at most 16384).
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
@@ -79,8 +80,28 @@ impl AlgoArgs {
     }
 }
 
+/// An algorithm name, for `--algo` and each item of `--algos` (clap names the option;
+/// the library's message would name `--algo` for both).
 pub fn parse_algo(s: &str) -> std::result::Result<Algorithm, String> {
-    s.parse().map_err(|e: obscura::Error| e.to_string())
+    s.trim().parse().map_err(|_| {
+        format!(
+            "unknown algorithm \"{}\" (known: {})",
+            s.trim(),
+            Algorithm::ALL.map(Algorithm::name).join(", ")
+        )
+    })
+}
+
+/// The scene argument as UTF-8 (the library takes `&str`), refused by name otherwise:
+/// clap's own message named no argument.
+fn parse_scene(s: std::ffi::OsString) -> std::result::Result<String, String> {
+    s.into_string().map_err(|s| {
+        format!(
+            "\"{}\" is not valid UTF-8; obscura reads only file names in UTF-8: rename or \
+             link the file",
+            s.to_string_lossy()
+        )
+    })
 }
 
 /// The same check for every subcommand, at parsing: `compare` and `bench` only reported
@@ -215,13 +236,19 @@ impl ViewArgs {
             }),
             ..base
         };
+        // An orthographic scene camera's near may be negative (the eye inside the
+        // scene), which a perspective view refuses: --fov refits it.
+        let to_perspective = self.fov.is_some()
+            && matches!(cam.projection, Projection::Orthographic { .. })
+            && self.ortho.is_none();
         if let Some(fov) = self.fov {
             cam.projection = Projection::Perspective { fov_y_degrees: fov };
         }
         if let Some(h) = self.ortho {
             cam.projection = Projection::Orthographic { height: h };
         }
-        if moved || self.ortho.is_some() {
+        let refit = moved || self.ortho.is_some() || to_perspective;
+        if refit {
             cam.fit_depth_range(&scene.bounds());
         }
         if let Some(n) = self.near {
@@ -229,6 +256,33 @@ impl ViewArgs {
         }
         if let Some(f) = self.far {
             cam.far = f;
+        }
+        // One of near and far given: say where the other came from.
+        let source = if scene.camera().is_some() && !refit {
+            "the scene camera's"
+        } else {
+            "fitted to the scene"
+        };
+        match (self.near, self.far) {
+            (Some(n), None) if n.is_finite() && n >= cam.far => {
+                return Err(Error::option(
+                    "--near",
+                    format!(
+                        "near {n} is not before the far distance {} ({source}): give --far too",
+                        readable(cam.far)
+                    ),
+                ));
+            }
+            (None, Some(f)) if f.is_finite() && f <= cam.near => {
+                return Err(Error::option(
+                    "--far",
+                    format!(
+                        "far {f} is not beyond the near distance {} ({source}): give --near too",
+                        readable(cam.near)
+                    ),
+                ));
+            }
+            _ => {}
         }
         cam.validate()?;
         Ok(cam)
@@ -263,6 +317,15 @@ impl ViewArgs {
             .build()
             .map_err(|e| Error::option("--threads", e.to_string()))?;
         Ok(pool.install(f))
+    }
+}
+
+/// A distance in a message: plain at ordinary magnitudes, in exponent form beyond.
+fn readable(x: f64) -> String {
+    if x != 0.0 && !(1e-4..1e6).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
     }
 }
 

@@ -555,3 +555,65 @@ fn negative_values_reach_the_checks_that_name_them() {
     assert!(o.status.success(), "{}", text(&o));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn camera_and_argument_errors_name_what_the_user_gave() {
+    let dir = tempdir("names");
+    std::fs::write(
+        dir.join("ortho.toml"),
+        "[camera]\neye = [0, 0, 0.5]\ntarget = [0, 0, 0]\northo_height = 4\n\n\
+         [[object]]\nprimitive = \"box\"\nsize = [2, 2, 2]\n",
+    )
+    .unwrap();
+    // --fov turns the scene's orthographic camera (near < 0, its eye inside the box)
+    // into a perspective one: near and far are refitted.
+    let o = obscura(
+        &["render", "ortho.toml", "--fov", "45", "--size", "8x8"],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    refused(
+        &dir,
+        &[
+            (
+                &["render", "demo:cube", "--far", "1"],
+                &["--far", "fitted to the scene", "give --near too"],
+            ),
+            (
+                &["render", "demo:cube", "--near", "1e6"],
+                &["--near", "give --far too"],
+            ),
+            (
+                &["compare", "demo:cube", "--algos", "zbuffer, bsp,foo"],
+                &["--algos", "unknown algorithm \"foo\""],
+            ),
+        ],
+    );
+    let o = obscura(
+        &[
+            "compare",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "--algos",
+            "zbuffer, bsp",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        let bad = std::ffi::OsStr::from_bytes(b"bad\xffname.obj");
+        let o = Command::new(env!("CARGO_BIN_EXE_obscura"))
+            .arg("render")
+            .arg(bad)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{t}");
+        assert!(t.contains("SCENE") && t.contains("not valid UTF-8"), "{t}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
