@@ -11,6 +11,8 @@ use obscura::{Result, Scene, prepare};
 use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
+use crate::out::{errln, out, outln};
+use crate::outputs::Outputs;
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -29,17 +31,63 @@ pub struct BenchArgs {
     /// Comma-separated algorithms (default: all).
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::common::parse_algo)]
     pub algos: Option<Vec<Algorithm>>,
-    /// The largest face count of the sweep.
-    #[arg(long, default_value_t = 1_000_000)]
+    /// The largest face count of the sweep, 1 to 10,000,000.
+    #[arg(long, default_value_t = 1_000_000, value_parser = parse_max_faces, allow_negative_numbers = true)]
     pub max_faces: usize,
-    /// Seconds an algorithm may take for one size; sizes predicted to take longer are skipped.
-    #[arg(long, default_value_t = 60.0)]
+    /// Seconds an algorithm may take for one size (a positive number); sizes predicted to
+    /// take longer are skipped.
+    #[arg(long, default_value_t = 60.0, value_parser = parse_budget, allow_negative_numbers = true)]
     pub budget: f64,
     #[command(flatten)]
     pub tuning: AlgoArgs,
     /// Also write the results as JSON.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+}
+
+/// The largest `--max-faces`: ten times the default sweep. A generated scene, its
+/// prepared view and the z-buffer take about 300 bytes a face (3 GB at this maximum),
+/// and several algorithms need many times that, so beyond it a sweep would run out of
+/// memory (a billion faces asked for 72 GB before any check) or time.
+pub const MAX_FACES: usize = 10_000_000;
+
+fn parse_max_faces(s: &str) -> std::result::Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a whole number of faces"))?;
+    if !(1..=MAX_FACES).contains(&n) {
+        return Err(format!("{n} faces: give 1 to {MAX_FACES}"));
+    }
+    Ok(n)
+}
+
+fn parse_budget(s: &str) -> std::result::Result<f64, String> {
+    let t: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a number of seconds"))?;
+    if !(t.is_finite() && t > 0.0) {
+        return Err(format!(
+            "{s} s: the budget must be a positive number of seconds"
+        ));
+    }
+    Ok(t)
+}
+
+/// Whether an algorithm with these measured `(faces, ms)` points is still run at `n`
+/// faces: not after an error, nor when the time predicted from the last two points (or
+/// quadratic growth from one) exceeds the budget.
+fn worth_running(points: &[(usize, f64)], n: usize, budget_s: f64) -> bool {
+    let predicted = match points {
+        [.., (n0, t0), (n1, t1)] if *t0 > 0.0 && *t1 > 0.0 => {
+            let e = ((t1 / t0).ln() / (*n1 as f64 / *n0 as f64).ln()).clamp(0.0, 3.0);
+            t1 * (n as f64 / *n1 as f64).powf(e)
+        }
+        [.., (n1, t1)] => t1 * (n as f64 / *n1 as f64).powi(2),
+        [] => 0.0,
+    };
+    predicted <= budget_s * 1e3 && !points.last().is_some_and(|p| p.1.is_nan())
 }
 
 /// What the seeds' table predicts for the exponent in P (faces) at a fixed image size.
@@ -112,6 +160,10 @@ fn growth_exponent(points: &[(usize, f64)]) -> Option<f64> {
 }
 
 pub fn run(args: &BenchArgs) -> Result<()> {
+    let mut outputs = Outputs::stage(
+        args.view.scene.as_deref(),
+        &[("--json", args.json.as_deref())],
+    )?;
     let base = match &args.view.scene {
         Some(_) => Some(args.view.load()?),
         None => None,
@@ -127,10 +179,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     .filter(|&n| n < max)
     .collect();
     sizes.push(max);
-    let algos = args
+    let mut algos = args
         .algos
         .clone()
         .unwrap_or_else(|| Algorithm::ALL.to_vec());
+    let mut seen = Vec::new();
+    algos.retain(|a| {
+        let first = !seen.contains(a);
+        seen.push(*a);
+        first
+    });
     let scene_for = |n: usize| -> Scene {
         match &base {
             Some(l) if n >= l.scene.polygon_count() => l.scene.clone(),
@@ -138,7 +196,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             None => scaled_triangles(n, 1),
         }
     };
-    println!(
+    outln!(
         "sweep over {} ({} threads); times in ms of prepare + render; sizes predicted to exceed {} s are skipped",
         base.as_ref()
             .map_or("generated scaled triangles", |l| l.spec.as_str()),
@@ -151,21 +209,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         algos.iter().map(|&a| (a, Vec::new())).collect();
     let options = args.tuning.options();
     for &n in &sizes {
+        // No scene is built for a size that every algorithm skips.
+        if !results
+            .iter()
+            .any(|(_, points)| worth_running(points, n, args.budget))
+        {
+            continue;
+        }
         let scene = scene_for(n);
         let viewport = args.view.viewport_or(&scene, (640, 360))?;
         let camera = args.view.camera(&scene, viewport)?;
         let prep = args.view.prepare_options();
         for (algorithm, points) in &mut results {
-            // Predict from the last two points (or assume quadratic growth from one).
-            let predicted = match points.as_slice() {
-                [.., (n0, t0), (n1, t1)] if *t0 > 0.0 && *t1 > 0.0 => {
-                    let e = ((t1 / t0).ln() / (*n1 as f64 / *n0 as f64).ln()).clamp(0.0, 3.0);
-                    t1 * (n as f64 / *n1 as f64).powf(e)
-                }
-                [.., (n1, t1)] => t1 * (n as f64 / *n1 as f64).powi(2),
-                [] => 0.0,
-            };
-            if predicted > args.budget * 1e3 || points.last().is_some_and(|p| p.1.is_nan()) {
+            if !worth_running(points, n, args.budget) {
                 continue;
             }
             let measure = || {
@@ -179,7 +235,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let mut best = match measure() {
                 Ok(t) => t,
                 Err(e) => {
-                    eprintln!("{algorithm} at {n} faces: {e}");
+                    errln!("{algorithm} at {n} faces: {e}");
                     points.push((n, f64::NAN));
                     continue;
                 }
@@ -191,29 +247,29 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 repeats += 1;
             }
             points.push((n, best));
-            eprintln!("  {:<18} {n:>9} faces {best:>10.2} ms", algorithm.name());
+            errln!("  {:<18} {n:>9} faces {best:>10.2} ms", algorithm.name());
         }
     }
-    println!();
-    print!("{:<18}", "algorithm");
+    // The table is printed once the JSON is in place: a closed pipe may cut it short.
+    let mut table = format!("\n{:<18}", "algorithm");
     for n in &sizes {
-        print!(" {n:>9}");
+        table += &format!(" {n:>9}");
     }
-    println!(" {:>8}  seed 000 expects", "exponent");
+    table += &format!(" {:>8}  seed 000 expects\n", "exponent");
     let mut doc = Vec::new();
     for (algorithm, points) in &results {
-        print!("{:<18}", algorithm.name());
+        table += &format!("{:<18}", algorithm.name());
         for n in &sizes {
-            match points.iter().find(|p| p.0 == *n) {
-                Some((_, t)) if t.is_finite() => print!(" {t:>9.1}"),
-                Some(_) => print!(" {:>9}", "error"),
-                None => print!(" {:>9}", "-"),
-            }
+            table += &match points.iter().find(|p| p.0 == *n) {
+                Some((_, t)) if t.is_finite() => format!(" {t:>9.1}"),
+                Some(_) => format!(" {:>9}", "error"),
+                None => format!(" {:>9}", "-"),
+            };
         }
         let valid: Vec<(usize, f64)> = points.iter().copied().filter(|p| p.1.is_finite()).collect();
         let e = growth_exponent(&valid);
-        println!(
-            " {:>8}  {}",
+        table += &format!(
+            " {:>8}  {}\n",
             e.map_or("-".to_string(), |e| format!("{e:.2}")),
             expected(*algorithm)
         );
@@ -223,11 +279,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "exponent": e,
         }));
     }
-    if let Some(p) = &args.json {
+    if args.json.is_some() {
         let text = serde_json::to_string_pretty(&json!({ "sizes": sizes, "algorithms": doc }))
             .expect("plain JSON");
-        std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
+        outputs.write("--json", |p| {
+            std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))
+        })?;
     }
+    outputs.commit()?;
+    out!("{table}");
     Ok(())
 }
 

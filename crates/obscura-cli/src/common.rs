@@ -2,7 +2,9 @@
 
 use std::time::Instant;
 
+use crate::out::errln;
 use clap::Args;
+use clap::builder::TypedValueParser;
 use glam::DVec3;
 use obscura::accel::bsp::{BspOptions, BspTraversal};
 use obscura::cull::backface::BackfaceMode;
@@ -15,7 +17,7 @@ use obscura::{Camera, Error, PrepareOptions, Projection, Result, Scene, Viewport
 pub struct ViewArgs {
     /// A mesh file (.obj .gltf .glb .stl .ply), a scene file (.toml) or demo:NAME
     /// (default, seed-task, cube, sphere, city, triangles). Without it, demo:default.
-    #[arg(value_name = "SCENE")]
+    #[arg(value_name = "SCENE", value_parser = clap::builder::OsStringValueParser::new().try_map(parse_scene))]
     pub scene: Option<String>,
     /// Image size in pixels, WIDTHxHEIGHT (each side at most 16384).
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
@@ -30,22 +32,22 @@ pub struct ViewArgs {
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
     pub up: Option<DVec3>,
     /// Vertical field of view in degrees (perspective).
-    #[arg(long, value_name = "DEG")]
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub fov: Option<f64>,
     /// Near clipping distance (default: fitted to the scene).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub near: Option<f64>,
     /// Far clipping distance (default: fitted to the scene).
-    #[arg(long, value_name = "F")]
+    #[arg(long, value_name = "F", allow_negative_numbers = true)]
     pub far: Option<f64>,
     /// Orthographic projection showing this height of the world.
-    #[arg(long, value_name = "HEIGHT")]
+    #[arg(long, value_name = "HEIGHT", allow_negative_numbers = true)]
     pub ortho: Option<f64>,
     /// Keep back faces (by default they are culled on closed objects).
     #[arg(long)]
     pub no_backface: bool,
-    /// Worker threads (default: all cores; 1 for single-thread figures).
-    #[arg(long, value_name = "N")]
+    /// Worker threads, at most 1024 (default: all cores; 1 for single-thread figures).
+    #[arg(long, value_name = "N", value_parser = parse_threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
 }
 
@@ -55,8 +57,12 @@ pub struct AlgoArgs {
     /// Bounding volume for raycast-bounds: sphere, aabb, obb, kdop.
     #[arg(long, default_value = "aabb", value_parser = parse_bounds)]
     pub bounds: BoundsKind,
-    /// Octree depth for the octree algorithm: voxels are 2^DEPTH on a side (at most 10).
-    #[arg(long, value_name = "DEPTH", default_value_t = 7)]
+    /// Octree depth for the octree algorithm: voxels are 2^DEPTH on a side (0 to 10).
+    /// Each level multiplies the octree's memory and build time by about 4: depth 8 on
+    /// the 1M-triangle demo:sphere takes 12 MB, but depth 10 on a scene of many large
+    /// overlapping triangles (demo:triangles) takes minutes and over 5 GB.
+    #[arg(long, value_name = "DEPTH", default_value_t = 7, value_parser = parse_octree_depth,
+          allow_negative_numbers = true)]
     pub octree_depth: u32,
     /// BSP traversal: front-to-back (write each pixel once, stop when the image is
     /// full) or back-to-front (the painter's algorithm).
@@ -74,8 +80,41 @@ impl AlgoArgs {
     }
 }
 
+/// An algorithm name, for `--algo` and each item of `--algos` (clap names the option;
+/// the library's message would name `--algo` for both).
 pub fn parse_algo(s: &str) -> std::result::Result<Algorithm, String> {
-    s.parse().map_err(|e: obscura::Error| e.to_string())
+    s.trim().parse().map_err(|_| {
+        format!(
+            "unknown algorithm \"{}\" (known: {})",
+            s.trim(),
+            Algorithm::ALL.map(Algorithm::name).join(", ")
+        )
+    })
+}
+
+/// The scene argument as UTF-8 (the library takes `&str`), refused by name otherwise:
+/// clap's own message named no argument.
+fn parse_scene(s: std::ffi::OsString) -> std::result::Result<String, String> {
+    s.into_string().map_err(|s| {
+        format!(
+            "\"{}\" is not valid UTF-8; obscura reads only file names in UTF-8: rename or \
+             link the file",
+            s.to_string_lossy()
+        )
+    })
+}
+
+/// The same check for every subcommand, at parsing: `compare` and `bench` only reported
+/// a bad depth as one algorithm's error and ended with status 0.
+pub fn parse_octree_depth(s: &str) -> std::result::Result<u32, String> {
+    let max = obscura::accel::octree::MAX_DEPTH;
+    match s.trim().parse::<u32>() {
+        Ok(d) if d <= max => Ok(d),
+        _ => Err(format!(
+            "\"{s}\": give a whole number from 0 to {max} ({} voxels on a side)",
+            1u32 << max
+        )),
+    }
 }
 
 pub fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {
@@ -84,6 +123,24 @@ pub fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {
 
 pub fn parse_bsp_traversal(s: &str) -> std::result::Result<BspTraversal, String> {
     s.parse().map_err(|e: obscura::Error| e.to_string())
+}
+
+/// The most worker threads `--threads` accepts: far more than any machine's cores (a
+/// pool of 100,000 threads takes minutes just to start).
+pub const MAX_THREADS: usize = 1024;
+
+pub fn parse_threads(s: &str) -> std::result::Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a whole number of threads"))?;
+    if n > MAX_THREADS {
+        return Err(format!(
+            "{n} threads: at most {MAX_THREADS} (this machine has {} cores)",
+            std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
+        ));
+    }
+    Ok(n)
 }
 
 /// The default image size.
@@ -141,7 +198,7 @@ impl ViewArgs {
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         scene.ensure_not_empty(&spec)?;
         for w in scene.report().warnings() {
-            eprintln!("warning: {spec}: {w}");
+            errln!("warning: {spec}: {w}");
         }
         Ok(Loaded {
             spec,
@@ -179,13 +236,19 @@ impl ViewArgs {
             }),
             ..base
         };
+        // An orthographic scene camera's near may be negative (the eye inside the
+        // scene), which a perspective view refuses: --fov refits it.
+        let to_perspective = self.fov.is_some()
+            && matches!(cam.projection, Projection::Orthographic { .. })
+            && self.ortho.is_none();
         if let Some(fov) = self.fov {
             cam.projection = Projection::Perspective { fov_y_degrees: fov };
         }
         if let Some(h) = self.ortho {
             cam.projection = Projection::Orthographic { height: h };
         }
-        if moved || self.ortho.is_some() {
+        let refit = moved || self.ortho.is_some() || to_perspective;
+        if refit {
             cam.fit_depth_range(&scene.bounds());
         }
         if let Some(n) = self.near {
@@ -193,6 +256,33 @@ impl ViewArgs {
         }
         if let Some(f) = self.far {
             cam.far = f;
+        }
+        // One of near and far given: say where the other came from.
+        let source = if scene.camera().is_some() && !refit {
+            "the scene camera's"
+        } else {
+            "fitted to the scene"
+        };
+        match (self.near, self.far) {
+            (Some(n), None) if n.is_finite() && n >= cam.far => {
+                return Err(Error::option(
+                    "--near",
+                    format!(
+                        "near {n} is not before the far distance {} ({source}): give --far too",
+                        readable(cam.far)
+                    ),
+                ));
+            }
+            (None, Some(f)) if f.is_finite() && f <= cam.near => {
+                return Err(Error::option(
+                    "--far",
+                    format!(
+                        "far {f} is not beyond the near distance {} ({source}): give --near too",
+                        readable(cam.near)
+                    ),
+                ));
+            }
+            _ => {}
         }
         cam.validate()?;
         Ok(cam)
@@ -227,6 +317,15 @@ impl ViewArgs {
             .build()
             .map_err(|e| Error::option("--threads", e.to_string()))?;
         Ok(pool.install(f))
+    }
+}
+
+/// A distance in a message: plain at ordinary magnitudes, in exponent form beyond.
+fn readable(x: f64) -> String {
+    if x != 0.0 && !(1e-4..1e6).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
     }
 }
 

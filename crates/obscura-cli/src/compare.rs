@@ -6,12 +6,15 @@ use std::time::Instant;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use obscura::frame::{available_memory, check_frames_fit};
 use obscura::surface::{Algorithm, Stats, render};
-use obscura::{Frame, Result, RgbImage, prepare};
+use obscura::{Frame, Result, RgbImage, Viewport, prepare};
 use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
 use crate::grid;
+use crate::out::out;
+use crate::outputs::Outputs;
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -82,6 +85,28 @@ fn difference_mask(picture: &RgbImage, frame: &Frame, reference: &Frame) -> RgbI
     out
 }
 
+/// Frames' worth of memory (a frame and its shaded image, 11 bytes a pixel) that
+/// comparing `algorithms` holds at its peak: each algorithm's frame (8 bytes a pixel),
+/// picture and difference mask (3 each) and their two tiles in the grid (6), plus one
+/// for the algorithm being run.
+fn frames_held(algorithms: usize) -> u64 {
+    2 * algorithms as u64 + 1
+}
+
+/// Refuses a comparison whose frames would not fit in `available` bytes, before any
+/// rendering (it aborted allocating after minutes at 16384x16384).
+fn check_memory(viewport: Viewport, algorithms: usize, available: Option<u64>) -> Result<()> {
+    check_frames_fit(viewport, frames_held(algorithms), available).map_err(|e| {
+        obscura::Error::option(
+            "--size",
+            format!(
+                "{e}: compare keeps the frame, picture and difference mask of each of its \
+                 {algorithms} algorithms; try a smaller --size or fewer --algos"
+            ),
+        )
+    })
+}
+
 fn progress_bar(name: &str) -> ProgressBar {
     let pb = ProgressBar::new(1000);
     pb.set_style(
@@ -95,6 +120,10 @@ fn progress_bar(name: &str) -> ProgressBar {
 }
 
 pub fn run(args: &CompareArgs) -> Result<()> {
+    let mut outputs = Outputs::stage(
+        args.view.scene.as_deref(),
+        &[("-o", Some(&args.output)), ("--json", args.json.as_deref())],
+    )?;
     let loaded = args.view.load()?;
     let scene = &loaded.scene;
     let viewport = args.view.viewport_or(scene, (480, 270))?;
@@ -104,8 +133,14 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         .algos
         .clone()
         .unwrap_or_else(|| Algorithm::ALL.to_vec());
-    algos.retain(|&a| a != Algorithm::ZBuffer);
     algos.insert(0, Algorithm::ZBuffer);
+    let mut seen = Vec::new();
+    algos.retain(|a| {
+        let first = !seen.contains(a);
+        seen.push(*a);
+        first
+    });
+    check_memory(viewport, algos.len(), available_memory())?;
 
     let rows = args.view.with_threads(|| {
         let view = prepare(scene, &camera, viewport, &prep)?;
@@ -128,7 +163,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     })??;
 
     let reference = match &rows[0].result {
-        Ok((f, _, _)) => f.clone(),
+        Ok((f, _, _)) => f,
         Err(e) => {
             return Err(obscura::Error::option(
                 "--algos",
@@ -137,16 +172,17 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         }
     };
     let pixels = viewport.pixel_count() as f64;
-    println!(
-        "{} at {}x{}: {} faces, {} triangles",
+    // The table is printed once the files are in place: a closed pipe may cut it short.
+    let mut report = format!(
+        "{} at {}x{}: {} faces, {} triangles\n",
         loaded.spec,
         viewport.width,
         viewport.height,
         scene.face_count(),
         scene.triangle_count()
     );
-    println!(
-        "{:<18} {:>10} {:>10} {:>9}  structure",
+    report += &format!(
+        "{:<18} {:>10} {:>10} {:>9}  structure\n",
         "algorithm", "time ms", "differ", "agree %"
     );
     let mut tiles = Vec::new();
@@ -154,10 +190,10 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     for row in &rows {
         match &row.result {
             Ok((frame, stats, ms)) => {
-                let differ = frame.differences(&reference).len();
+                let differ = frame.differences(reference).len();
                 let agree = 100.0 * (1.0 - differ as f64 / pixels);
-                println!(
-                    "{:<18} {:>10.2} {:>10} {:>9.3}  {}",
+                report += &format!(
+                    "{:<18} {:>10.2} {:>10} {:>9.3}  {}\n",
                     row.algorithm.name(),
                     ms,
                     differ,
@@ -165,7 +201,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                     summary(stats)
                 );
                 let picture = frame.shade(scene, &camera);
-                let mask = difference_mask(&picture, frame, &reference);
+                let mask = difference_mask(&picture, frame, reference);
                 tiles.push((row.algorithm.name().to_string(), picture));
                 tiles.push((format!("{} diff: {differ} px", row.algorithm.name()), mask));
                 table.push(json!({
@@ -174,8 +210,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 }));
             }
             Err(e) => {
-                println!(
-                    "{:<18} {:>10} {:>10} {:>9}  error: {e}",
+                report += &format!(
+                    "{:<18} {:>10} {:>10} {:>9}  error: {e}\n",
                     row.algorithm.name(),
                     "-",
                     "-",
@@ -185,18 +221,43 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             }
         }
     }
-    grid::compose(&tiles, tiles.len().clamp(1, 4)).write_png(&args.output)?;
-    println!(
-        "wrote {} (each algorithm's picture and its differences from the z-buffer in red)",
-        args.output.display()
-    );
-    if let Some(p) = &args.json {
+    let grid = grid::compose(&tiles, tiles.len().clamp(1, 4));
+    outputs.write("-o", |p| grid.write_png(p))?;
+    if args.json.is_some() {
         let doc = json!({
             "scene": loaded.spec, "width": viewport.width, "height": viewport.height,
             "load_ms": loaded.load_ms, "algorithms": table,
         });
         let text = serde_json::to_string_pretty(&doc).expect("JSON of plain values");
-        std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
+        outputs.write("--json", |p| {
+            std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))
+        })?;
     }
+    outputs.commit()?;
+    out!(
+        "{report}wrote {} (each algorithm's picture and its differences from the z-buffer in red)\n",
+        args.output.display()
+    );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn comparisons_larger_than_memory_are_refused_naming_the_size() {
+        let big = Viewport::new(16384, 16384).unwrap();
+        let e = check_memory(big, 11, Some(16 << 30))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--size") && e.contains("16384x16384") && e.contains("23 frames"),
+            "{e}"
+        );
+        // One algorithm's frames fit where eleven do not.
+        assert!(check_memory(big, 1, Some(16 << 30)).is_ok());
+        assert!(check_memory(Viewport::new(480, 270).unwrap(), 11, Some(1 << 30)).is_ok());
+        assert!(check_memory(big, 11, None).is_ok());
+    }
 }

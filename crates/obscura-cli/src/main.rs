@@ -4,11 +4,15 @@ mod bench;
 mod common;
 mod compare;
 mod grid;
+mod out;
+mod outputs;
 mod render;
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+
+use crate::out::errln;
 
 /// Large buffers (the loaded scene, the prepared view, the frame) in whole huge pages:
 /// a one-shot run otherwise spends milliseconds on page faults at their ends.
@@ -48,7 +52,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            errln!("error: {e}");
             ExitCode::FAILURE
         }
     }

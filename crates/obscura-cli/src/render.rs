@@ -9,6 +9,8 @@ use obscura::{Result, prepare};
 use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
+use crate::out::outln;
+use crate::outputs::Outputs;
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -64,6 +66,15 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
+    let mut outputs = Outputs::stage(
+        args.view.scene.as_deref(),
+        &[
+            ("-o", Some(&args.output)),
+            ("--ids", args.ids.as_deref()),
+            ("--depth", args.depth.as_deref()),
+            ("--stats-json", args.stats_json.as_deref()),
+        ],
+    )?;
     let loaded = args.view.load()?;
     let scene = &loaded.scene;
     let viewport = args.view.viewport(scene)?;
@@ -85,53 +96,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         ImageView::Shaded => frame.shade(scene, &camera),
         ImageView::Ids => frame.id_false_colour(),
     };
-    image.write_png(&args.output)?;
-    if let Some(p) = &args.ids {
-        frame.write_ids_npy(p)?;
+    outputs.write("-o", |p| image.write_png(p))?;
+    if args.ids.is_some() {
+        outputs.write("--ids", |p| frame.write_ids_npy(p))?;
     }
-    if let Some(p) = &args.depth {
-        frame.write_depth_npy(p)?;
+    if args.depth.is_some() {
+        outputs.write("--depth", |p| frame.write_depth_npy(p))?;
     }
-
-    if args.stats {
-        println!(
-            "scene {} : {} objects, {} faces, {} triangles; loaded in {:.1} ms",
-            loaded.spec,
-            scene.objects().len(),
-            scene.face_count(),
-            scene.triangle_count(),
-            loaded.load_ms
-        );
-        println!(
-            "{:<48} {:>9} {:>12} {:>12} {:>9}",
-            "stage", "unit", "in", "out", "ms"
-        );
-        for s in &stages.stages {
-            println!(
-                "{:<48} {:>9} {:>12} {:>12} {:>9.2}",
-                s.stage, s.unit, s.input, s.output, s.ms
-            );
-        }
-        let algo_ms = stats.get("time_ms").unwrap_or(0.0);
-        println!(
-            "{:<48} {:>9} {:>12} {:>12} {:>9.2}",
-            format!("visibility: {}", args.algo),
-            "pixels",
-            viewport.pixel_count(),
-            frame.covered_pixels(),
-            algo_ms
-        );
-        for (k, v) in &stats.entries {
-            if k != "time_ms" {
-                println!("  {k:<46} {v:>12}");
-            }
-        }
-        println!(
-            "render_ms {render_ms:.2} (prepare {prepare_ms:.2}, {} {algo_ms:.2})",
-            args.algo
-        );
-    }
-    if let Some(p) = &args.stats_json {
+    if args.stats_json.is_some() {
         let doc = json!({
             "scene": loaded.spec,
             "algorithm": args.algo.name(),
@@ -150,9 +122,60 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "stats": stats,
         });
         let text = serde_json::to_string_pretty(&doc).expect("JSON of plain values");
-        std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))?;
+        outputs.write("--stats-json", |p| {
+            std::fs::write(p, text + "\n").map_err(|e| obscura::Error::io(p, e))
+        })?;
     }
-    println!(
+    // Every file is in place before the report, which a closed pipe may cut short.
+    outputs.commit()?;
+
+    if args.stats {
+        outln!(
+            "scene {} : {} objects, {} faces, {} triangles; loaded in {:.1} ms",
+            loaded.spec,
+            scene.objects().len(),
+            scene.face_count(),
+            scene.triangle_count(),
+            loaded.load_ms
+        );
+        outln!(
+            "{:<48} {:>9} {:>12} {:>12} {:>9}",
+            "stage",
+            "unit",
+            "in",
+            "out",
+            "ms"
+        );
+        for s in &stages.stages {
+            outln!(
+                "{:<48} {:>9} {:>12} {:>12} {:>9.2}",
+                s.stage,
+                s.unit,
+                s.input,
+                s.output,
+                s.ms
+            );
+        }
+        let algo_ms = stats.get("time_ms").unwrap_or(0.0);
+        outln!(
+            "{:<48} {:>9} {:>12} {:>12} {:>9.2}",
+            format!("visibility: {}", args.algo),
+            "pixels",
+            viewport.pixel_count(),
+            frame.covered_pixels(),
+            algo_ms
+        );
+        for (k, v) in &stats.entries {
+            if k != "time_ms" {
+                outln!("  {k:<46} {v:>12}");
+            }
+        }
+        outln!(
+            "render_ms {render_ms:.2} (prepare {prepare_ms:.2}, {} {algo_ms:.2})",
+            args.algo
+        );
+    }
+    outln!(
         "wrote {} ({}x{}, {}, {:.1} ms)",
         args.output.display(),
         viewport.width,

@@ -188,3 +188,432 @@ fn compare_writes_a_grid_and_a_table() {
     assert!(json.contains("\"differing_pixels\": 0"), "{json}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Runs the binary with its standard output a pipe whose reading end is already
+/// closed, as in `obscura ... | head -0`.
+fn obscura_into_closed_pipe(args: &[&str], dir: &PathBuf) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_obscura"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    drop(child.stdout.take());
+    child.wait_with_output().expect("the binary ends")
+}
+
+#[test]
+fn a_closed_standard_output_ends_the_program_quietly() {
+    let dir = tempdir("pipe");
+    let cases: [&[&str]; 3] = [
+        &["render", "demo:cube", "--size", "8x8", "-o", "r.png"],
+        &[
+            "compare",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "--algos",
+            "zbuffer,bsp",
+        ],
+        &["bench", "--max-faces", "300", "--algos", "zbuffer"],
+    ];
+    for args in cases {
+        let o = obscura_into_closed_pipe(args, &dir);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+    }
+    // The work before the report was done.
+    assert!(dir.join("r.png").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The names of the files in `dir`, sorted.
+fn listing(dir: &PathBuf) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn outputs_that_collide_or_cannot_be_written_are_refused_before_any_file_is_touched() {
+    let dir = tempdir("outputs");
+    let mesh = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::fs::write(dir.join("victim.obj"), mesh).unwrap();
+    let cases: [(&[&str], &[&str]); 6] = [
+        (
+            &["render", "demo:cube", "-o", "same.png", "--ids", "same.png"],
+            &["--ids", "same file as -o"],
+        ),
+        (
+            &[
+                "render",
+                "demo:cube",
+                "--ids",
+                "x.npy",
+                "--depth",
+                "./x.npy",
+            ],
+            &["--depth", "same file as --ids"],
+        ),
+        (
+            &["render", "victim.obj", "-o", "victim.obj"],
+            &["-o", "input scene"],
+        ),
+        (
+            &["render", "victim.obj", "--ids", "./victim.obj"],
+            &["--ids", "input scene"],
+        ),
+        (
+            &["compare", "demo:cube", "-o", "c.png", "--json", "c.png"],
+            &["--json", "same file as -o"],
+        ),
+        (
+            &[
+                "render",
+                "demo:cube",
+                "-o",
+                "x3.png",
+                "--ids",
+                "x3_ids.npy",
+                "--stats-json",
+                "missing-dir/s.json",
+            ],
+            &["missing-dir/s.json"],
+        ),
+    ];
+    for (args, expected) in cases {
+        let o = obscura(args, &dir);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {t}");
+        for e in expected {
+            assert!(t.contains(e), "{args:?}: expected {e:?} in {t}");
+        }
+        // Nothing written, nothing left behind, the input intact.
+        assert_eq!(listing(&dir), ["victim.obj"], "{args:?}");
+        assert_eq!(
+            std::fs::read_to_string(dir.join("victim.obj")).unwrap(),
+            mesh
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn outputs_replace_existing_files_and_leave_no_temporary_files() {
+    let dir = tempdir("replace");
+    std::fs::write(dir.join("r.png"), "old").unwrap();
+    let o = obscura(
+        &[
+            "render",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "-o",
+            "r.png",
+            "--stats-json",
+            "s.json",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(listing(&dir), ["r.png", "s.json"]);
+    assert_eq!(&std::fs::read(dir.join("r.png")).unwrap()[1..4], b"PNG");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Runs the binary, killing it (and failing) if it takes more than `seconds`.
+fn obscura_within(args: &[&str], dir: &PathBuf, seconds: u64) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_obscura"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed().as_secs() >= seconds {
+            child.kill().ok();
+            child.wait().ok();
+            panic!("{args:?} still running after {seconds} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// Runs each case within 20 s and checks it fails with status 2 (a usage error) or 1,
+/// with each expected text and no panic.
+fn refused(dir: &PathBuf, cases: &[(&[&str], &[&str])]) {
+    for (args, expected) in cases {
+        let o = obscura_within(args, dir, 20);
+        let t = text(&o);
+        assert!(
+            matches!(o.status.code(), Some(1 | 2)),
+            "{args:?} should be refused: {:?} {t}",
+            o.status
+        );
+        assert!(!t.contains("panicked"), "{args:?}: {t}");
+        for e in *expected {
+            assert!(t.contains(e), "{args:?}: expected {e:?} in {t}");
+        }
+    }
+}
+
+#[test]
+fn thread_counts_beyond_the_limit_are_refused() {
+    let dir = tempdir("threads");
+    refused(
+        &dir,
+        &[
+            (
+                &[
+                    "render",
+                    "demo:cube",
+                    "--size",
+                    "8x8",
+                    "--threads",
+                    "100000",
+                ],
+                &["--threads", "at most 1024"],
+            ),
+            (
+                &["compare", "demo:cube", "--threads", "18446744073709551615"],
+                &["--threads", "at most 1024"],
+            ),
+            (
+                &["render", "demo:cube", "--threads", "-1"],
+                &["--threads", "\"-1\" is not a whole number"],
+            ),
+        ],
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bench_refuses_meaningless_budgets_and_face_counts() {
+    let dir = tempdir("bench-args");
+    let zb = ["bench", "--algos", "zbuffer", "--max-faces"];
+    let with = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = zb.to_vec();
+        v.extend_from_slice(extra);
+        v
+    };
+    let cases = [
+        (with(&["1000", "--budget=-5"]), "positive number of seconds"),
+        (
+            with(&["1000", "--budget", "-5"]),
+            "positive number of seconds",
+        ),
+        (
+            with(&["1000", "--budget", "NaN"]),
+            "positive number of seconds",
+        ),
+        (
+            with(&["1000", "--budget", "0"]),
+            "positive number of seconds",
+        ),
+        (with(&["0"]), "give 1 to 10000000"),
+        (with(&["-3"]), "not a whole number of faces"),
+        (
+            with(&["1000000000", "--budget", "0.001"]),
+            "give 1 to 10000000",
+        ),
+    ];
+    for (args, expected) in &cases {
+        refused(&dir, &[(args.as_slice(), &[expected])]);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bench_runs_each_algorithm_once() {
+    let dir = tempdir("bench-dup");
+    let o = obscura_within(
+        &["bench", "--max-faces", "200", "--algos", "zbuffer,zbuffer"],
+        &dir,
+        60,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("zbuffer")).count(),
+        1,
+        "{table}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `MemAvailable` in bytes, where the system says.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    Some(line.split_whitespace().nth(1)?.parse::<u64>().ok()? * 1024)
+}
+
+#[test]
+fn compare_refuses_up_front_a_size_whose_frames_cannot_fit() {
+    // Every algorithm at the largest size holds 23 frames of 2.75 GiB: more than any
+    // machine this runs on, unless it has over 64 GiB free.
+    if available_memory().is_none_or(|m| m > 64 << 30) {
+        eprintln!("skipped: available memory unknown or above 64 GiB");
+        return;
+    }
+    let dir = tempdir("compare-memory");
+    refused(
+        &dir,
+        &[(
+            &["compare", "demo:cube", "--size", "16384x16384"],
+            &["--size", "16384x16384", "23 frames need", "fewer --algos"],
+        )],
+    );
+    assert_eq!(listing(&dir), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn compare_runs_each_algorithm_once() {
+    let dir = tempdir("compare-dup");
+    let o = obscura(
+        &[
+            "compare",
+            "demo:cube",
+            "--size",
+            "16x16",
+            "--algos",
+            "bsp,bsp,zbuffer",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("bsp ")).count(),
+        1,
+        "{table}"
+    );
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("zbuffer ")).count(),
+        1,
+        "{table}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn octree_depth_is_checked_by_every_subcommand() {
+    let dir = tempdir("octree-depth");
+    let expected: &[&str] = &["--octree-depth", "from 0 to 10"];
+    refused(
+        &dir,
+        &[
+            (&["render", "demo:cube", "--octree-depth", "11"], expected),
+            (&["compare", "demo:cube", "--octree-depth", "11"], expected),
+            (
+                &["bench", "--algos", "octree,zbuffer", "--octree-depth", "11"],
+                expected,
+            ),
+            (&["compare", "demo:cube", "--octree-depth", "-1"], expected),
+        ],
+    );
+    assert_eq!(listing(&dir), Vec::<String>::new());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn negative_values_reach_the_checks_that_name_them() {
+    let dir = tempdir("negative");
+    refused(
+        &dir,
+        &[
+            (
+                &["render", "demo:cube", "--fov", "-10"],
+                &["-10", "(0, 180)"],
+            ),
+            (&["render", "demo:cube", "--ortho", "-1"], &["-1"]),
+        ],
+    );
+    // A negative near is valid for an orthographic view.
+    let o = obscura(
+        &[
+            "render",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "--ortho",
+            "4",
+            "--near",
+            "-1",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn camera_and_argument_errors_name_what_the_user_gave() {
+    let dir = tempdir("names");
+    std::fs::write(
+        dir.join("ortho.toml"),
+        "[camera]\neye = [0, 0, 0.5]\ntarget = [0, 0, 0]\northo_height = 4\n\n\
+         [[object]]\nprimitive = \"box\"\nsize = [2, 2, 2]\n",
+    )
+    .unwrap();
+    // --fov turns the scene's orthographic camera (near < 0, its eye inside the box)
+    // into a perspective one: near and far are refitted.
+    let o = obscura(
+        &["render", "ortho.toml", "--fov", "45", "--size", "8x8"],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    refused(
+        &dir,
+        &[
+            (
+                &["render", "demo:cube", "--far", "1"],
+                &["--far", "fitted to the scene", "give --near too"],
+            ),
+            (
+                &["render", "demo:cube", "--near", "1e6"],
+                &["--near", "give --far too"],
+            ),
+            (
+                &["compare", "demo:cube", "--algos", "zbuffer, bsp,foo"],
+                &["--algos", "unknown algorithm \"foo\""],
+            ),
+        ],
+    );
+    let o = obscura(
+        &[
+            "compare",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "--algos",
+            "zbuffer, bsp",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        let bad = std::ffi::OsStr::from_bytes(b"bad\xffname.obj");
+        let o = Command::new(env!("CARGO_BIN_EXE_obscura"))
+            .arg("render")
+            .arg(bad)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{t}");
+        assert!(t.contains("SCENE") && t.contains("not valid UTF-8"), "{t}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

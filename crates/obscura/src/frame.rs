@@ -335,10 +335,27 @@ fn write_npy(path: &Path, descr: &str, rows: u32, cols: u32, data: &[u8]) -> Res
 
 /// Refuses a frame (with its shaded image) larger than the available memory.
 fn check_fits(viewport: Viewport, available: Option<u64>) -> std::result::Result<(), String> {
-    let needed = viewport.pixel_count() as u64 * BYTES_PER_PIXEL;
+    check_fits_many(viewport, 1, available)
+}
+
+/// Refuses `count` frames, each with its shaded image, that together exceed `available`
+/// bytes (no limit when it is unknown).
+fn check_fits_many(
+    viewport: Viewport,
+    count: u64,
+    available: Option<u64>,
+) -> std::result::Result<(), String> {
+    let needed = (viewport.pixel_count() as u64)
+        .saturating_mul(BYTES_PER_PIXEL)
+        .saturating_mul(count);
+    let what = if count == 1 {
+        "the frame needs".to_string()
+    } else {
+        format!("{count} frames need")
+    };
     match available {
         Some(avail) if needed > avail => Err(format!(
-            "the frame needs {} MiB and only {} MiB of memory are available",
+            "{what} {} MiB and only {} MiB of memory are available",
             needed >> 20,
             avail >> 20
         )),
@@ -346,8 +363,23 @@ fn check_fits(viewport: Viewport, available: Option<u64>) -> std::result::Result
     }
 }
 
-/// `MemAvailable` from `/proc/meminfo`, where there is one.
-fn available_memory() -> Option<u64> {
+/// Refuses holding `count` frames of this size at once, each with its shaded image (as
+/// one [`Frame`] is checked when it is made), when they would not fit in `available`
+/// bytes of memory ([`available_memory`] for this machine; `None`: no limit known): for
+/// callers that keep several frames, such as a comparison of algorithms. The error
+/// names the image size.
+pub fn check_frames_fit(viewport: Viewport, count: u64, available: Option<u64>) -> Result<()> {
+    check_fits_many(viewport, count, available).map_err(|reason| Error::InvalidViewport {
+        width: u64::from(viewport.width),
+        height: u64::from(viewport.height),
+        reason,
+    })
+}
+
+/// The memory available to a new allocation: `MemAvailable` from `/proc/meminfo`,
+/// where there is one.
+#[must_use]
+pub fn available_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
@@ -408,5 +440,13 @@ mod tests {
         assert!(e.contains("2816 MiB") && e.contains("1024 MiB"), "{e}");
         assert!(check_fits(vp, Some(1 << 40)).is_ok());
         assert!(check_fits(vp, None).is_ok());
+        let e = check_frames_fit(vp, 3, Some(8 << 30))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("16384x16384") && e.contains("3 frames need 8448 MiB"),
+            "{e}"
+        );
+        assert!(check_frames_fit(vp, 2, Some(8 << 30)).is_ok());
     }
 }
