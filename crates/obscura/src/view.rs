@@ -556,6 +556,7 @@ pub fn prepare<'s>(
 ) -> Result<PreparedView<'s>> {
     viewport.validate()?;
     camera.validate_for(viewport)?;
+    camera.validate_window(viewport, scene_magnitude(scene))?;
     let mut t = ViewTransform::new(camera, viewport);
     let mut stats = PipelineStats::default();
     let threads = passes::thread_count();
@@ -650,6 +651,16 @@ fn confirm_inside(scene: &Scene, visible: &mut [(usize, bool)], bases: &[u32], c
             let n = scene.objects()[*k].mesh.positions().len();
             *inside = codes[first..first + n].iter().all(|&c| c == 0);
         }
+    }
+}
+
+/// The largest absolute world coordinate of the scene's objects (0 for none).
+fn scene_magnitude(scene: &Scene) -> f64 {
+    let b = scene.bounds();
+    if b.is_empty() {
+        0.0
+    } else {
+        b.min.abs().max_element().max(b.max.abs().max_element())
     }
 }
 
@@ -757,6 +768,7 @@ mod reference {
         options: &PrepareOptions,
     ) -> Result<PreparedView<'s>> {
         camera.validate_for(viewport)?;
+        camera.validate_window(viewport, scene_magnitude(scene))?;
         let mut t = ViewTransform::new(camera, viewport);
         let mut stats = PipelineStats::default();
 

@@ -710,3 +710,33 @@ fn a_vertex_on_the_view_volume_boundary_loses_no_pixel() {
         assert_eq!(ray.ids, z.ids, "the ray caster's image");
     }
 }
+
+/// Orthographic windows whose pixels are finer than the rounding of the coordinates are
+/// refused, naming the height: a window 1e-20 high over a unit cube drew a quarter of the
+/// face that fills it, 1e-300 drew nothing, and one 1e-14 high seen from 10 units over
+/// 4 rows made depth sort draw nothing. Windows just above the floor are drawn (see
+/// `very_narrow_views_give_every_image_space_algorithm_the_z_buffer_image`).
+#[test]
+fn orthographic_windows_finer_than_the_coordinates_are_refused() {
+    let s = unit_cube_scene();
+    let refused = |eye: DVec3, height: f64, rows: u64| {
+        let cam = Camera::orthographic(eye, DVec3::ZERO, DVec3::Y, height, 0.1, 100.0);
+        let vp = Viewport::new(rows, rows).unwrap();
+        prepare(&s, &cam, vp, &PrepareOptions::default())
+            .err()
+            .map(|e| e.to_string())
+    };
+    for (eye, height, rows) in [
+        (DVec3::new(0.0, 0.0, 5.0), 1e-20, 64),
+        (DVec3::new(0.0, 0.0, 5.0), 1e-300, 64),
+        (DVec3::new(0.0, 0.0, 10.0), 1e-14, 4),
+    ] {
+        let e = refused(eye, height, rows).expect("refused");
+        assert!(e.contains("orthographic height"), "{e}");
+    }
+    // The floor is 4 eps of the largest coordinate per pixel: 8.9e-15 from 10 units.
+    let floor = 4.0 * f64::EPSILON * 10.0;
+    let eye = DVec3::new(0.0, 0.0, 10.0);
+    assert!(refused(eye, floor * 4.0 * 0.99, 4).is_some());
+    assert_eq!(refused(eye, floor * 4.0 * 1.01, 4), None);
+}

@@ -224,6 +224,30 @@ impl Camera {
         Ok(())
     }
 
+    /// Refuses an orthographic window whose pixels are narrower than the rounding of
+    /// the coordinates they are computed from: `4 eps` of `magnitude`, the largest
+    /// absolute coordinate of the eye and of the scene (see [`crate::view::prepare`],
+    /// which calls this). A window 1e-20 high over a unit cube drew only a quarter of
+    /// the face that fills it, and one 1e-14 high seen from 10 units over 4 rows (one
+    /// `eps` of the coordinates a pixel) made depth sort draw nothing. Perspective views
+    /// are checked by angle instead ([`Camera::validate_for`]).
+    pub fn validate_window(&self, viewport: Viewport, magnitude: f64) -> Result<()> {
+        if let Projection::Orthographic { height } = self.projection {
+            let pixel = height / f64::from(viewport.height.max(1));
+            let floor = 4.0 * f64::EPSILON * magnitude.max(self.eye.abs().max_element());
+            if pixel < floor {
+                return Err(Error::InvalidCamera(format!(
+                    "orthographic height {height:e} over {} rows: a pixel spans {pixel:.1e}, \
+                     below what coordinates as large as {:.1e} resolve in double precision \
+                     ({floor:.1e}); widen the view or move the scene nearer the origin",
+                    viewport.height,
+                    magnitude.max(self.eye.abs().max_element()),
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// The camera's orthonormal basis `(right, up, forward)` in world space.
     #[must_use]
     pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
