@@ -13,6 +13,7 @@ use obscura::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
 use obscura::accel::triangles::{ClosestHit, PrimaryRays, SceneTriangles, WatertightRay};
 use obscura::cull::backface::BackfaceMode;
 use obscura::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb};
+use obscura::raster::FillRule;
 use obscura::scene::{Camera, MeshBuilder, ObjectDesc, demo};
 use obscura::surface::raycast::{self, Acceleration};
 use obscura::surface::{Algorithm, RenderOptions, render};
@@ -1049,4 +1050,45 @@ fn grid_equals_brute_force_on_scenes_tiny_against_their_distance() {
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     assert!(far_rays > 0.0);
+}
+
+/// The ray casters follow `RenderOptions::fill_rule`: with the inclusive rule, a pixel
+/// centre exactly on a triangle's right edge is covered, as the z-buffer covers it (they
+/// always applied the top-left rule). Window 2 x 2 over [0, 2]^2; the triangle's right
+/// edge is x = 0.5, through the centres of the left column.
+#[test]
+fn ray_casters_follow_the_fill_rule_on_edges() {
+    let mut scene = Scene::new();
+    let mut b = MeshBuilder::new();
+    for (x, y) in [(-1.0, -1.0), (0.5, -1.0), (0.5, 3.0)] {
+        b.push_position(DVec3::new(x, y, 0.0));
+    }
+    b.push_face(&[0, 1, 2], None).unwrap();
+    scene
+        .add(ObjectDesc::new("t", b.finish().0).with_closed(false))
+        .unwrap();
+    let camera = Camera::orthographic(
+        DVec3::new(1.0, 1.0, 5.0),
+        DVec3::new(1.0, 1.0, 0.0),
+        DVec3::Y,
+        2.0,
+        1.0,
+        10.0,
+    );
+    let view = prepare(
+        &scene,
+        &camera,
+        Viewport::new(2, 2).unwrap(),
+        &PrepareOptions::default(),
+    )
+    .unwrap();
+    for (fill, covered) in [(FillRule::TopLeft, 0), (FillRule::Inclusive, 2)] {
+        let opts = RenderOptions::default().with_fill_rule(fill);
+        let (z, _) = render(Algorithm::ZBuffer, &view, &opts).unwrap();
+        assert_eq!(z.covered_pixels(), covered, "{fill:?}");
+        for a in VARIANTS {
+            let (f, _) = render(a, &view, &opts).unwrap();
+            assert_eq!(f.ids, z.ids, "{} with {fill:?}", a.name());
+        }
+    }
 }

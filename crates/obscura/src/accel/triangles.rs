@@ -27,7 +27,9 @@
 //! horizontal on screen and `m` points down (`m · right = 0` and `m · up < 0`, a *top*
 //! edge). The neighbour across the edge computes exactly `-m`, so exactly one of them
 //! takes the ray; and where a pixel centre falls exactly on a projected edge, the same
-//! polygon wins as in the z-buffer.
+//! polygon wins as in the z-buffer. With [`crate::raster::FillRule::Inclusive`]
+//! ([`PrimaryRays::with_fill_rule`]) a ray on an edge hits, as the rasterizers then
+//! cover every sample on an edge.
 //!
 //! - Complexity: O(T) to build for T triangles; the test is O(1), about 40 flops.
 //! - Source: seed 000 "Αλγόριθμος Εκπομπής Ακτίνων" (`intersect_primitive_ray`), seed
@@ -218,6 +220,9 @@ pub struct PrimaryRays {
     pub near: f64,
     /// Far plane distance (the largest accepted `t`).
     pub far: f64,
+    /// Rays exactly on an edge hit the triangle whatever the edge
+    /// ([`crate::raster::FillRule::Inclusive`]) instead of by the top-left rule.
+    inclusive: bool,
 }
 
 impl PrimaryRays {
@@ -238,7 +243,16 @@ impl PrimaryRays {
             orthographic: matches!(camera.projection, Projection::Orthographic { .. }),
             near: camera.near,
             far: camera.far,
+            inclusive: false,
         }
+    }
+
+    /// These rays deciding rays exactly on an edge by `fill`, as the rasterizers do:
+    /// the top-left rule (the default), or every edge inclusive.
+    #[must_use]
+    pub fn with_fill_rule(mut self, fill: crate::raster::FillRule) -> Self {
+        self.inclusive = fill == crate::raster::FillRule::Inclusive;
+        self
     }
 
     /// The ray through image point `(px, py)`: `(origin, direction)`.
@@ -313,6 +327,7 @@ impl PrimaryRays {
     #[must_use]
     pub fn tie_rule(&self) -> TieRule {
         TieRule {
+            inclusive: self.inclusive,
             orthographic: self.orthographic,
             eye: self.eye,
             forward: self.forward,
@@ -326,6 +341,7 @@ impl PrimaryRays {
 /// edge (see the module doc).
 #[derive(Clone, Copy, Debug)]
 pub struct TieRule {
+    inclusive: bool,
     orthographic: bool,
     eye: DVec3,
     forward: DVec3,
@@ -339,6 +355,9 @@ impl TieRule {
     #[cold]
     #[must_use]
     pub fn accepts_edge(&self, p: DVec3, q: DVec3, r: DVec3) -> bool {
+        if self.inclusive {
+            return true;
+        }
         let (m, side) = if self.orthographic {
             let m = (q - p).cross(self.forward);
             (m, m.dot(r - p))

@@ -171,7 +171,7 @@ pub fn render_brute_force(
             )
         }
     }
-    let setup = Setup::new(view, triangles);
+    let setup = Setup::new(view, triangles, options.fill_rule);
     let start = Instant::now();
     let (frame, counters) = setup.cast(options, |ctx, counters| {
         ctx.ray.dispatch(Run {
@@ -316,7 +316,7 @@ pub fn render_bounds(
             closest
         }
     }
-    let setup = Setup::new(view, triangles);
+    let setup = Setup::new(view, triangles, options.fill_rule);
     let build = Instant::now();
     let margin = 1e-9 * setup.scale.max(f64::MIN_POSITIVE);
     let mut points: Vec<DVec3> = Vec::new();
@@ -380,7 +380,7 @@ pub fn render_bvh(
     bvh: &Bvh,
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
-    let setup = Setup::new(view, triangles);
+    let setup = Setup::new(view, triangles, options.fill_rule);
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
         let mut stack = PacketStack::default();
@@ -432,7 +432,7 @@ pub fn render_grid(
     grid: &UniformGrid,
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
-    let setup = Setup::new(view, triangles);
+    let setup = Setup::new(view, triangles, options.fill_rule);
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
         let mut mailbox = Mailbox::new(triangles);
@@ -500,7 +500,11 @@ struct Setup<'a> {
 }
 
 impl<'a> Setup<'a> {
-    fn new(view: &PreparedView<'_>, triangles: &'a SceneTriangles) -> Self {
+    fn new(
+        view: &PreparedView<'_>,
+        triangles: &'a SceneTriangles,
+        fill: crate::raster::FillRule,
+    ) -> Self {
         let camera = view.camera();
         let ignored = triangles.ignored_polygons(view.scene(), camera, view.options().backface);
         let front_triangles = triangles
@@ -515,7 +519,7 @@ impl<'a> Setup<'a> {
             b.min.abs().max(b.max.abs()).max_element() + b.extent().max_element()
         };
         let vp = view.viewport();
-        let rays = PrimaryRays::new(camera, vp);
+        let rays = PrimaryRays::new(camera, vp).with_fill_rule(fill);
         Setup {
             window_x: (0..vp.width)
                 .map(|i| rays.window_x(f64::from(i) + 0.5))
