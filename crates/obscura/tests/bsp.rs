@@ -628,3 +628,28 @@ fn tolerances_beyond_a_thousandth_of_the_scale_are_refused() {
         assert_eq!(BspTree::build(&scene, &options).is_ok(), ok, "{tolerance}");
     }
 }
+
+/// A build that passes its fragment budget stops with an error naming the budget,
+/// instead of splitting on until memory runs out (30,000 large random triangles did).
+#[test]
+fn a_build_past_its_fragment_budget_is_an_error() {
+    let scene = random_triangle_objects(300, 7, 2.0, 3.0);
+    let full = BspTree::build(&scene, &BspOptions::default()).unwrap();
+    // Every polygon is a fragment, and each split makes two more.
+    let st = full.stats();
+    let made = st.input_polygons - st.degenerate + 2 * st.splits;
+    assert!(made > 400, "{made}");
+    let budget = (made / 2) as usize;
+    let e = BspTree::build(&scene, &BspOptions::default().with_max_fragments(budget))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains(&format!("passed {budget} fragments")), "{e}");
+    // Exactly enough is enough: every fragment made, split or not, counts.
+    assert!(
+        BspTree::build(
+            &scene,
+            &BspOptions::default().with_max_fragments(made as usize)
+        )
+        .is_ok()
+    );
+}
