@@ -28,6 +28,12 @@
 //!   meeting the face (ray direction `d` scaled to unit depth, face normal `n`), which
 //!   grows at grazing incidence. Ids near an edge may name the neighbouring face. The
 //!   tests check these bounds against the z-buffer.
+//! - A camera near a surface: when the near plane's point of a ray lies in a Partial
+//!   voxel (the eye within about a voxel of a surface: a street-level view of
+//!   demo:city, an eye on a face's plane), that voxel is the first hit, at depth
+//!   `near`, and the whole image can be that one face. Raise the depth
+//!   (`--octree-depth`) so that voxels are smaller than the eye's distance to the
+//!   surfaces, or use an exact algorithm.
 //! - Back faces: the octree does not know the viewpoint and its voxels are solid, so
 //!   there is no back-face test; visibility comes from the order alone. The source face
 //!   of a voxel may be a face that is back-facing in this view (on edges, and in objects
