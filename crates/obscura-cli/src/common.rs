@@ -336,3 +336,19 @@ fn default_size(scene: &Scene) -> Option<(u64, u64)> {
         _ => None,
     }
 }
+
+/// A progress bar on standard error for one algorithm's run (fed by the library's
+/// progress callback, in thousandths), cleared when done.
+pub fn progress_bar(name: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new(1000);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {msg:<18} [{bar:30}] {percent:>3}% {elapsed}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    pb.set_message(name.to_string());
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    pb
+}

@@ -5,13 +5,12 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use obscura::frame::{available_memory, check_frames_fit};
 use obscura::surface::{Algorithm, Stats, render};
 use obscura::{Frame, Result, RgbImage, Viewport, prepare};
 use serde_json::json;
 
-use crate::common::{AlgoArgs, ViewArgs};
+use crate::common::{AlgoArgs, ViewArgs, progress_bar};
 use crate::grid;
 use crate::out::out;
 use crate::outputs::Outputs;
@@ -105,18 +104,6 @@ fn check_memory(viewport: Viewport, algorithms: usize, available: Option<u64>) -
             ),
         )
     })
-}
-
-fn progress_bar(name: &str) -> ProgressBar {
-    let pb = ProgressBar::new(1000);
-    pb.set_style(
-        ProgressStyle::with_template("{spinner} {msg:<18} [{bar:30}] {percent:>3}% {elapsed}")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    pb.set_message(name.to_string());
-    pb.enable_steady_tick(std::time::Duration::from_millis(120));
-    pb
 }
 
 pub fn run(args: &CompareArgs) -> Result<()> {

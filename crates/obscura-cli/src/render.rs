@@ -1,6 +1,8 @@
 //! `obscura render`.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
@@ -79,18 +81,31 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = &loaded.scene;
     let viewport = args.view.viewport(scene)?;
     let camera = args.view.camera(scene, viewport)?;
-    let options = args.tuning.options();
+    let mut options = args.tuning.options();
+    // Slow algorithms on big scenes (brute-force ray casting of a million triangles
+    // takes hours) show how far they are, when someone is watching.
+    let bar = std::io::stderr()
+        .is_terminal()
+        .then(|| crate::common::progress_bar(args.algo.name()));
+    if let Some(bar) = &bar {
+        let bar = bar.clone();
+        options = options.with_progress(Arc::new(move |f| bar.set_position((f * 1000.0) as u64)));
+    }
     let prep = args.view.prepare_options();
     let threads = args.view.threads.unwrap_or(0);
 
-    let (stages, frame, stats, render_ms, prepare_ms) = args.view.with_threads(|| {
+    let rendered = args.view.with_threads(|| {
         let start = Instant::now();
         let view = prepare(scene, &camera, viewport, &prep)?;
         let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
         let (frame, stats) = render(args.algo, &view, &options)?;
         let render_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok::<_, obscura::Error>((view.stats().clone(), frame, stats, render_ms, prepare_ms))
-    })??;
+    })?;
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+    let (stages, frame, stats, render_ms, prepare_ms) = rendered?;
 
     let image = match args.image {
         ImageView::Shaded => frame.shade(scene, &camera),
