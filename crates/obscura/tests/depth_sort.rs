@@ -681,3 +681,53 @@ fn a_far_unused_vertex_does_not_widen_the_tolerance() {
         }
     }
 }
+
+/// Plane tolerances come from the polygons compared, not from the whole view: a ground
+/// 2e5 across set a tolerance of 1e-4 for two triangles 1e-4 across seen from 7e-4, so
+/// each lay "in" the other's plane and the farther one was painted over the nearer
+/// (depth sort, its matrix variant and BSP; found by differential fuzzing).
+#[test]
+fn a_huge_ground_does_not_widen_the_tolerance_of_small_faces() {
+    let ground = [
+        DVec3::new(-1e5, -0.5, -1e5),
+        DVec3::new(1e5, -0.5, -1e5),
+        DVec3::new(0.0, -0.5, 1e5),
+    ];
+    let a = [
+        DVec3::new(-0.3562382818474941, 0.7444809339560193, 0.897653718014897),
+        DVec3::new(-0.3561476433140566, 0.7444226130012443, 0.8976613215178887),
+        DVec3::new(-0.3561594810059844, 0.7445570117547675, 0.8975611849039358),
+    ];
+    let b = [
+        DVec3::new(-0.35611691114062516, 0.7444356971406771, 0.8976772801954467),
+        DVec3::new(-0.356125341694795, 0.7444802894121665, 0.8975457750276025),
+        DVec3::new(-0.35615530045644556, 0.7444125918762325, 0.8976907624236481),
+    ];
+    let mut scene = Scene::new();
+    for (name, t) in [("ground", ground), ("a", a), ("b", b)] {
+        scene.add(polygon_object(name, &t)).unwrap();
+    }
+    let cam = Camera::perspective(
+        DVec3::new(-0.35554734204734917, 0.7447119824066012, 0.897097151136797),
+        DVec3::new(-0.35581145409553216, 0.744716219131852, 0.8972393723594176),
+        DVec3::Y,
+        69.68723287276187,
+        7.928314539492351e-7,
+        400000.0,
+    );
+    let v = view(&scene, &cam, 256, 256);
+    let (z, _) = render(Algorithm::ZBuffer, &v, &RenderOptions::default()).unwrap();
+    let shown = |id: u32| z.ids.iter().filter(|&&i| i == id).count();
+    assert!(
+        shown(1) > 0 && shown(2) > 0,
+        "both small triangles are seen"
+    );
+    for a in [
+        Algorithm::DepthSort,
+        Algorithm::DepthSortMatrix,
+        Algorithm::Bsp,
+    ] {
+        let (f, _) = render(a, &v, &RenderOptions::default()).unwrap();
+        assert_like_zbuffer(&f, &v, 1.0, a.name());
+    }
+}

@@ -43,11 +43,12 @@
 //!   scene's box ([`BspTree::origin`]): planes and distances are computed there, so
 //!   that a small scene far from the world's origin (a part at x = 1e7) keeps the
 //!   precision of its own size. Node and fragment planes are in that frame.
-//! - Tolerance: a vertex within `tolerance * scale` of a plane (scale: the largest
-//!   coordinate in the tree's frame, about half the scene's size), or within the
-//!   rounding of the world coordinates (`16 eps` of the origin's largest coordinate)
-//!   if that is larger, plus the splitter's own deviation from its plane (non-planar
-//!   quads), counts as on it.
+//! - Tolerance: a vertex of a polygon within `tolerance * s` of a plane counts as on
+//!   it, plus the splitter's own deviation from its plane (non-planar quads); `s` is
+//!   the larger extent of the two polygons in the tree's frame (a polygon's centre's
+//!   largest coordinate plus its radius), at most the largest coordinate in that frame
+//!   (about half the scene's size), and the tolerance at least the rounding of the
+//!   world coordinates (`16 eps` of the origin's largest coordinate).
 //! - Limitations: static scenes only (seed: "suitable for static scenes, not dynamic
 //!   ones"); random or interpenetrating geometry can multiply the fragment count.
 
@@ -339,7 +340,8 @@ pub struct BspNode {
     pub front: Option<u32>,
     /// The subtree on the negative side.
     pub back: Option<u32>,
-    /// The distance within which a point counted as on this plane.
+    /// A distance within which a point counted as on this plane (an upper bound: each
+    /// polygon was classified with the tolerance of its pair with the splitter).
     pub eps: f64,
     first: u32,
     count: u32,
@@ -392,6 +394,10 @@ pub struct BspTree {
     object_vertex_counts: Vec<u32>,
     face_count: u32,
     eps: f64,
+    /// [`BspOptions::tolerance`].
+    relative_tolerance: f64,
+    /// The rounding of the world coordinates (the smallest tolerance).
+    rounding: f64,
     /// Bounding sphere (centre, radius) of each fragment, for quick classification.
     spheres: Vec<[f64; 4]>,
     /// A distance far above the rounding of plane evaluations in the scene.
@@ -446,6 +452,8 @@ impl BspTree {
             object_vertex_counts: Vec::with_capacity(scene.objects().len()),
             face_count: scene.face_count(),
             eps: 0.0,
+            relative_tolerance: options.tolerance,
+            rounding: 0.0,
             spheres: Vec::new(),
             slack: 0.0,
             subtree_bounds: Vec::new(),
@@ -482,6 +490,7 @@ impl BspTree {
         tree.eps = (options.tolerance * scale)
             .max(rounding)
             .max(f64::MIN_POSITIVE);
+        tree.rounding = rounding.max(f64::MIN_POSITIVE);
         tree.slack = 1e-12 * scale.max(f64::MIN_POSITIVE);
         let mut points = Vec::new();
         for (k, o) in scene.objects().iter().enumerate() {
@@ -545,7 +554,7 @@ impl BspTree {
             let (plane, eps, splitter) = match self.choose_splitter(&set, options, &mut rng) {
                 Splitter::Polygon(i) => {
                     let f = &self.fragments[set[i] as usize];
-                    (f.plane, self.eps + f.thickness, Some(set[i]))
+                    (f.plane, self.own_eps(set[i]) + f.thickness, Some(set[i]))
                 }
                 Splitter::Axis(plane) => (plane, self.eps, None),
             };
@@ -576,7 +585,8 @@ impl BspTree {
                 plane,
                 front: None,
                 back: None,
-                eps,
+                // An upper bound of the pairs' tolerances.
+                eps: eps.max(self.eps),
                 first,
                 count: on.len() as u32,
                 depth,
@@ -682,7 +692,7 @@ impl BspTree {
         let mut best = (f64::INFINITY, 0usize, false);
         for &c in &candidates {
             let f = &self.fragments[set[c] as usize];
-            let (cost, one_sided, _) = score(&f.plane, self.eps + f.thickness, c);
+            let (cost, one_sided, _) = score(&f.plane, self.own_eps(set[c]) + f.thickness, c);
             if cost < best.0 {
                 best = (cost, c, one_sided);
             }
@@ -749,7 +759,26 @@ impl BspTree {
         front < set.len() && back < set.len()
     }
 
+    /// The tolerance of fragment `f` by its own extent (see [`BspTree::pair_eps`]).
+    fn own_eps(&self, f: u32) -> f64 {
+        let [cx, cy, cz, r] = self.spheres[f as usize];
+        (self.relative_tolerance * (DVec3::new(cx, cy, cz).abs().max_element() + r))
+            .max(self.rounding)
+            .min(self.eps)
+    }
+
+    /// The tolerance of classifying fragment `f` against a plane whose own tolerance is
+    /// `eps` (the splitter's, or the tree's for an axis plane): the larger of the two,
+    /// each taken from its polygon's extent in the tree's frame (its centre's largest
+    /// coordinate plus its radius), at most the tree's. With the tree's tolerance for
+    /// every pair, a ground 2e5 across set 1e-4 for triangles 1e-4 across, and two of
+    /// them were painted in the wrong order.
+    fn pair_eps(&self, f: u32, eps: f64) -> f64 {
+        eps.max(self.own_eps(f))
+    }
+
     fn classify(&self, f: u32, plane: &Plane, eps: f64) -> Side {
+        let eps = self.pair_eps(f, eps);
         let len = plane.normal.length();
         // Most fragments are far from the plane: their bounding sphere decides without
         // reading the vertices (with a margin far above rounding).
@@ -789,7 +818,7 @@ impl BspTree {
         let idx: Vec<u32> = self.fragment_indices(&frag).to_vec();
         points.clear();
         points.extend(idx.iter().map(|&v| self.local[v as usize]));
-        match split_polygon(points, plane, eps) {
+        match split_polygon(points, plane, self.pair_eps(f, eps)) {
             Split::Front | Split::Coplanar { .. } => (Some(f), None),
             Split::Back => (None, Some(f)),
             Split::Spanning { front, back } => {
@@ -926,8 +955,8 @@ impl BspTree {
         self.origin
     }
 
-    /// The absolute tolerance of plane classification (before adding a splitter's
-    /// thickness).
+    /// The largest absolute tolerance of plane classification (before adding a
+    /// splitter's thickness): pairs of small polygons get less (see the module doc).
     #[must_use]
     pub fn tolerance(&self) -> f64 {
         self.eps

@@ -8,8 +8,11 @@ use crate::geom::Plane;
 use crate::raster::{DepthPlane, FillRule, PixelRect, PolygonCoverage};
 use crate::view::{PreparedView, ViewTransform, ViewVertex};
 
-/// Relative tolerance of plane tests: a vertex within `RELATIVE_EPS * scale` (the
-/// largest absolute eye coordinate of the view) of a plane counts as on it.
+/// Relative tolerance of plane tests: a vertex within `RELATIVE_EPS * scale` of a
+/// plane counts as on it, `scale` being the largest absolute eye coordinate of the two
+/// polygons compared (see [`WorkSet::sides`]). With the largest coordinate of the whole
+/// view instead, a ground 2e5 across set a tolerance of 1e-4 for triangles 1e-4
+/// across seen from 7e-4, and two of them were painted in the wrong order.
 const RELATIVE_EPS: f64 = 1e-9;
 
 /// A polygon being sorted.
@@ -23,8 +26,9 @@ pub(super) struct Poly {
     len: u32,
     /// Eye-space plane, unit normal, oriented so the viewpoint is on its positive side.
     pub plane: Plane,
-    /// Distance within which a point counts as on `plane` (includes the original
-    /// polygon's own deviation from it).
+    /// Distance within which a point counts as on `plane` by this polygon's own scale
+    /// (includes the original polygon's own deviation from it); a comparison with
+    /// another polygon takes the larger of the two.
     pub eps: f64,
     /// Pixels whose samples lie in its screen box (clipped to the image).
     pub rect: PixelRect,
@@ -115,13 +119,6 @@ impl WorkSet {
     pub fn from_view(view: &PreparedView<'_>, fill: FillRule) -> WorkSet {
         let vp = view.viewport();
         let t = *view.transform();
-        // The scale of the polygons' own vertices (a vertex no polygon uses, or one of
-        // an object culled whole, must not widen the tolerance).
-        let (_, indices, _) = view.polygon_arrays();
-        let scale = indices.iter().fold(0.0f64, |m, &i| {
-            m.max(view.vertices()[i as usize].eye.abs().max_element())
-        });
-        let base_eps = RELATIVE_EPS * scale.max(f64::MIN_POSITIVE);
         let mut ws = WorkSet {
             polys: Vec::with_capacity(view.polygon_count()),
             verts: Vec::with_capacity(view.vertices().len()),
@@ -158,6 +155,8 @@ impl WorkSet {
             let thickness = eye
                 .iter()
                 .fold(0.0f64, |m, &p| m.max(plane.evaluate(p).abs()));
+            let scale = eye.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+            let base_eps = RELATIVE_EPS * scale.max(f64::MIN_POSITIVE);
             let start = ws.verts.len() as u32;
             ws.verts.extend(poly.vertices().copied());
             let (dmin, dmax) = depth_extent(&eye);
@@ -199,8 +198,8 @@ impl WorkSet {
         Sides {
             p_by_q: self.range(p, &qp.plane),
             q_by_p: self.range(q, &pp.plane),
-            p_eps: pp.eps,
-            q_eps: qp.eps,
+            p_eps: pp.eps.max(qp.eps),
+            q_eps: qp.eps.max(pp.eps),
         }
     }
 
@@ -323,7 +322,7 @@ impl WorkSet {
     /// once and shared by both pieces.
     pub fn split(&mut self, i: u32, by: u32) -> Option<[u32; 2]> {
         let plane = self.polys[by as usize].plane;
-        let eps = self.polys[by as usize].eps;
+        let eps = self.polys[by as usize].eps.max(self.polys[i as usize].eps);
         let parent = self.polys[i as usize];
         let mut eye = std::mem::take(&mut self.scratch);
         eye.clear();
