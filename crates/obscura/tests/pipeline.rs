@@ -740,3 +740,48 @@ fn orthographic_windows_finer_than_the_coordinates_are_refused() {
     assert!(refused(eye, floor * 4.0 * 0.99, 4).is_some());
     assert_eq!(refused(eye, floor * 4.0 * 1.01, 4), None);
 }
+
+/// An up vector is a direction: its length does not matter. A zero one and one along
+/// the view direction are refused with messages that say which; distances in messages
+/// are written in scientific notation (a far plane of 1e300 was printed with 301 digits).
+#[test]
+fn camera_messages_say_what_is_wrong() {
+    let s = unit_cube_scene();
+    let vp = Viewport::new(32, 24).unwrap();
+    let cam = |up: DVec3| {
+        Camera::perspective(
+            DVec3::new(0.5, 0.5, 5.0),
+            DVec3::splat(0.5),
+            up,
+            40.0,
+            1.0,
+            10.0,
+        )
+    };
+    let reference = zbuffer(
+        &s,
+        &cam(DVec3::new(1.0, 1.0, 0.0)),
+        32,
+        24,
+        &PrepareOptions::default(),
+    );
+    assert!(reference.covered_pixels() > 100);
+    for up in [DVec3::new(1e-10, 1e-10, 0.0), DVec3::new(1e300, 1e300, 0.0)] {
+        let f = zbuffer(&s, &cam(up), 32, 24, &PrepareOptions::default());
+        assert_eq!(f.ids, reference.ids, "up {up:?}");
+    }
+    let message = |c: Camera| {
+        prepare(&s, &c, vp, &PrepareOptions::default())
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+    };
+    assert!(message(cam(DVec3::ZERO)).contains("up vector is zero"));
+    let along = message(cam(DVec3::new(0.0, 0.0, -3.0)));
+    assert!(along.contains("parallel to the view direction"), "{along}");
+    let far = message(Camera {
+        far: 1e300,
+        ..cam(DVec3::Y)
+    });
+    assert!(far.contains("1e300") && far.len() < 200, "{far}");
+}

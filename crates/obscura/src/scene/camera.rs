@@ -137,24 +137,30 @@ impl Camera {
         if dir.length() <= 8.0 * f64::EPSILON * scale {
             return bad("the eye is on the target: no view direction".into());
         }
-        if !self.up.length().is_finite() {
-            return bad(format!(
-                "the up vector {:?} is too long",
-                self.up.to_array()
-            ));
+        // The up vector is a direction: its length does not matter (scaled by its
+        // largest component, neither 1e-10 nor 1e300 is a problem).
+        let up_scale = self.up.abs().max_element();
+        if up_scale == 0.0 {
+            return bad("the up vector is zero: it must give the image's up direction".into());
         }
-        if dir.normalize().cross(self.up).length() < 1e-9 || self.up.length() == 0.0 {
-            return bad("the up vector is zero or parallel to the view direction".into());
+        let up = (self.up / up_scale).normalize();
+        if dir.normalize().cross(up).length() < 1e-9 {
+            return bad(format!(
+                "the up vector {:?} is parallel to the view direction {:?} (looking straight \
+                 along it): choose another up direction",
+                self.up.to_array(),
+                dir.normalize().to_array()
+            ));
         }
         if !(self.near.is_finite() && self.far.is_finite() && self.far > self.near) {
             return bad(format!(
-                "need near < far, both finite (near {}, far {})",
+                "need near < far, both finite (near {:e}, far {:e})",
                 self.near, self.far
             ));
         }
         if self.near.abs() > limit || self.far.abs() > limit {
             return bad(format!(
-                "near {} or far {} is beyond the largest distance accepted, {limit:e}",
+                "near {:e} or far {:e} is beyond the largest distance accepted, {limit:e}",
                 self.near, self.far
             ));
         }
@@ -175,7 +181,7 @@ impl Camera {
                 // `near / far`, must stay a normal single-precision number.
                 if self.near < self.far / limit {
                     return bad(format!(
-                        "near {} is too small for far {}: far / near must be at most \
+                        "near {:e} is too small for far {:e}: far / near must be at most \
                          {limit:e} (depth keys near / depth are stored in single precision)",
                         self.near, self.far
                     ));
@@ -183,11 +189,11 @@ impl Camera {
             }
             Projection::Orthographic { height } => {
                 if !(height > 0.0 && height.is_finite()) {
-                    return bad(format!("orthographic height {height} must be positive"));
+                    return bad(format!("orthographic height {height:e} must be positive"));
                 }
                 if height > limit {
                     return bad(format!(
-                        "orthographic height {height} is beyond the largest distance \
+                        "orthographic height {height:e} is beyond the largest distance \
                          accepted, {limit:e}"
                     ));
                 }
@@ -252,7 +258,15 @@ impl Camera {
     #[must_use]
     pub fn basis(&self) -> (DVec3, DVec3, DVec3) {
         let f = (self.target - self.eye).normalize();
-        let r = f.cross(self.up).normalize();
+        // An up vector of extreme length (1e300 squares to infinity) is rescaled first;
+        // others are used as given.
+        let m = self.up.abs().max_element();
+        let up = if m > 1e-100 && m < 1e100 {
+            self.up
+        } else {
+            self.up / m
+        };
+        let r = f.cross(up).normalize();
         let u = r.cross(f);
         (r, u, f)
     }
