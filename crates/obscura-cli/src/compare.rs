@@ -30,7 +30,7 @@ pub struct CompareArgs {
     pub algos: Option<Vec<Algorithm>>,
     #[command(flatten)]
     pub tuning: AlgoArgs,
-    /// The grid image: each algorithm's picture and its difference mask.
+    /// The grid image (PNG): each algorithm's picture and its difference mask.
     #[arg(
         short = 'o',
         long = "output",

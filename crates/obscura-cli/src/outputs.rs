@@ -118,6 +118,22 @@ impl Outputs {
                 ));
             }
         }
+        // The picture is always PNG: a name promising another format would hold PNG
+        // data under a misleading extension (`-o out.jpg`).
+        for &(option, path) in &given {
+            if option == "-o"
+                && let Some(ext) = path.extension()
+                && !ext.eq_ignore_ascii_case("png")
+            {
+                return Err(Error::option(
+                    option,
+                    format!(
+                        "{}: obscura writes PNG images; name the file .png",
+                        path.display()
+                    ),
+                ));
+            }
+        }
         let mut staged = Outputs { files: Vec::new() };
         for (&(option, path), id) in given.iter().zip(ids) {
             staged.files.push(stage_one(option, path, id)?);
@@ -251,9 +267,11 @@ mod tests {
         let d = tempdir("commit");
         let a = d.join("a.txt");
         fs::write(&a, "old").unwrap();
-        let mut o = Outputs::stage(None, &[("-o", Some(&a))]).unwrap();
-        o.write("-o", |p| fs::write(p, "new").map_err(|e| Error::io(p, e)))
-            .unwrap();
+        let mut o = Outputs::stage(None, &[("--json", Some(&a))]).unwrap();
+        o.write("--json", |p| {
+            fs::write(p, "new").map_err(|e| Error::io(p, e))
+        })
+        .unwrap();
         assert_eq!(fs::read_to_string(&a).unwrap(), "old");
         drop(o);
         assert_eq!(fs::read_to_string(&a).unwrap(), "old");
@@ -262,9 +280,11 @@ mod tests {
             1,
             "a temporary file is left"
         );
-        let mut o = Outputs::stage(None, &[("-o", Some(&a))]).unwrap();
-        o.write("-o", |p| fs::write(p, "new").map_err(|e| Error::io(p, e)))
-            .unwrap();
+        let mut o = Outputs::stage(None, &[("--json", Some(&a))]).unwrap();
+        o.write("--json", |p| {
+            fs::write(p, "new").map_err(|e| Error::io(p, e))
+        })
+        .unwrap();
         o.commit().unwrap();
         assert_eq!(fs::read_to_string(&a).unwrap(), "new");
         assert_eq!(fs::read_dir(&d).unwrap().count(), 1);

@@ -244,10 +244,18 @@ fn outputs_that_collide_or_cannot_be_written_are_refused_before_any_file_is_touc
     let dir = tempdir("outputs");
     let mesh = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
     std::fs::write(dir.join("victim.obj"), mesh).unwrap();
-    let cases: [(&[&str], &[&str]); 6] = [
+    let cases: [(&[&str], &[&str]); 8] = [
         (
             &["render", "demo:cube", "-o", "same.png", "--ids", "same.png"],
             &["--ids", "same file as -o"],
+        ),
+        (
+            &["render", "demo:cube", "-o", "picture.jpg"],
+            &["-o", "picture.jpg", "writes PNG images"],
+        ),
+        (
+            &["compare", "demo:cube", "-o", "grid.webp"],
+            &["-o", "grid.webp", "writes PNG images"],
         ),
         (
             &[
