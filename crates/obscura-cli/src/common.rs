@@ -337,9 +337,9 @@ fn default_size(scene: &Scene) -> Option<(u64, u64)> {
     }
 }
 
-/// A progress bar on standard error for one algorithm's run (fed by the library's
-/// progress callback, in thousandths), cleared when done.
-pub fn progress_bar(name: &str) -> indicatif::ProgressBar {
+/// A progress bar on standard error for one algorithm's run, and the library's progress
+/// callback that feeds it (in thousandths). Clear it with `finish_and_clear` when done.
+pub fn progress_bar(name: &str) -> (indicatif::ProgressBar, obscura::surface::Progress) {
     let pb = indicatif::ProgressBar::new(1000);
     pb.set_style(
         indicatif::ProgressStyle::with_template(
@@ -350,5 +350,8 @@ pub fn progress_bar(name: &str) -> indicatif::ProgressBar {
     );
     pb.set_message(name.to_string());
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
-    pb
+    let bar = pb.clone();
+    let feed: obscura::surface::Progress =
+        std::sync::Arc::new(move |f| bar.set_position((f * 1000.0) as u64));
+    (pb, feed)
 }

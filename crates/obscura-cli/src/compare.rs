@@ -1,7 +1,6 @@
 //! `obscura compare`: every algorithm on one view, checked against the z-buffer.
 
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
@@ -133,12 +132,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         let view = prepare(scene, &camera, viewport, &prep)?;
         let mut rows = Vec::new();
         for &algorithm in &algos {
-            let pb = progress_bar(algorithm.name());
-            let bar = pb.clone();
-            let options = args
-                .tuning
-                .options()
-                .with_progress(Arc::new(move |f| bar.set_position((f * 1000.0) as u64)));
+            let (pb, progress) = progress_bar(algorithm.name());
+            let options = args.tuning.options().with_progress(progress);
             let start = Instant::now();
             let result = render(algorithm, &view, &options)
                 .map(|(f, s)| (f, s, start.elapsed().as_secs_f64() * 1e3))

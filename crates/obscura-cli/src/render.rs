@@ -2,7 +2,6 @@
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
@@ -87,9 +86,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let bar = std::io::stderr()
         .is_terminal()
         .then(|| crate::common::progress_bar(args.algo.name()));
-    if let Some(bar) = &bar {
-        let bar = bar.clone();
-        options = options.with_progress(Arc::new(move |f| bar.set_position((f * 1000.0) as u64)));
+    if let Some((_, progress)) = &bar {
+        options = options.with_progress(progress.clone());
     }
     let prep = args.view.prepare_options();
     let threads = args.view.threads.unwrap_or(0);
@@ -102,7 +100,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let render_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok::<_, obscura::Error>((view.stats().clone(), frame, stats, render_ms, prepare_ms))
     })?;
-    if let Some(bar) = &bar {
+    if let Some((bar, _)) = &bar {
         bar.finish_and_clear();
     }
     let (stages, frame, stats, render_ms, prepare_ms) = rendered?;

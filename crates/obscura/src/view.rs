@@ -555,15 +555,10 @@ pub fn prepare<'s>(
     options: &PrepareOptions,
 ) -> Result<PreparedView<'s>> {
     viewport.validate()?;
-    camera.validate_for(viewport)?;
-    camera.validate_window(viewport, scene_magnitude(scene))?;
-    let mut t = ViewTransform::new(camera, viewport);
+    let t = checked_transform(scene, camera, viewport)?;
     let mut stats = PipelineStats::default();
     let threads = passes::thread_count();
 
-    if let Some(fitted) = fitted_orthographic_planes(scene, camera, &t) {
-        t = ViewTransform::new(&fitted, viewport);
-    }
     let mut visible = visible_objects(scene, &t, options, &mut stats);
 
     // Vertices: world -> eye -> clip, outcodes, screen positions.
@@ -654,14 +649,17 @@ fn confirm_inside(scene: &Scene, visible: &mut [(usize, bool)], bases: &[u32], c
     }
 }
 
-/// The largest absolute world coordinate of the scene's objects (0 for none).
-fn scene_magnitude(scene: &Scene) -> f64 {
-    let b = scene.bounds();
-    if b.is_empty() {
-        0.0
-    } else {
-        b.min.abs().max_element().max(b.max.abs().max_element())
-    }
+/// The transform of a camera whose view the scene's coordinates resolve (checked by
+/// [`Camera::validate_for`] and [`Camera::validate_window`]), with an orthographic
+/// camera's planes fitted to the scene ([`fitted_orthographic_planes`]).
+fn checked_transform(scene: &Scene, camera: &Camera, viewport: Viewport) -> Result<ViewTransform> {
+    camera.validate_for(viewport)?;
+    camera.validate_window(viewport, scene.bounds().magnitude())?;
+    let fitted = fitted_orthographic_planes(scene, camera);
+    Ok(ViewTransform::new(
+        fitted.as_ref().unwrap_or(camera),
+        viewport,
+    ))
 }
 
 /// An orthographic camera's planes brought in to the depths that the scene's objects
@@ -675,14 +673,11 @@ fn scene_magnitude(scene: &Scene) -> f64 {
 /// 0.001), and with `far` 1e20 the clip coordinates put the whole scene on the near
 /// plane. Perspective keys (`near / depth`) keep their relative precision at any depth.
 #[must_use]
-pub fn fitted_orthographic_planes(
-    scene: &Scene,
-    camera: &Camera,
-    t: &ViewTransform,
-) -> Option<Camera> {
-    if !t.orthographic {
+pub fn fitted_orthographic_planes(scene: &Scene, camera: &Camera) -> Option<Camera> {
+    if !matches!(camera.projection, Projection::Orthographic { .. }) {
         return None;
     }
+    let view = camera.view_matrix();
     let (mut lo, mut hi, mut size) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
     for o in scene.objects() {
         if o.bounds.is_empty() || o.mesh.polygon_count() == 0 {
@@ -690,7 +685,7 @@ pub fn fitted_orthographic_planes(
         }
         size = size.max(o.bounds.extent().max_element());
         for c in o.bounds.corners() {
-            let depth = -t.view.transform_point3(c).z;
+            let depth = -view.transform_point3(c).z;
             lo = lo.min(depth);
             hi = hi.max(depth);
         }
@@ -767,14 +762,9 @@ mod reference {
         viewport: Viewport,
         options: &PrepareOptions,
     ) -> Result<PreparedView<'s>> {
-        camera.validate_for(viewport)?;
-        camera.validate_window(viewport, scene_magnitude(scene))?;
-        let mut t = ViewTransform::new(camera, viewport);
+        let t = checked_transform(scene, camera, viewport)?;
         let mut stats = PipelineStats::default();
 
-        if let Some(fitted) = fitted_orthographic_planes(scene, camera, &t) {
-            t = ViewTransform::new(&fitted, viewport);
-        }
         let mut visible = visible_objects(scene, &t, options, &mut stats);
 
         // Vertices: world -> eye -> clip, outcodes, screen positions.

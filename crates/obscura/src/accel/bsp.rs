@@ -460,10 +460,7 @@ impl BspTree {
             subtree_counts: Vec::new(),
             stats: BspBuildStats::default(),
         };
-        let bounds = scene
-            .objects()
-            .iter()
-            .fold(Aabb::EMPTY, |b, o| b.union(o.bounds));
+        let bounds = scene.bounds();
         if !bounds.is_empty() {
             tree.origin = bounds.center();
         }

@@ -233,13 +233,13 @@ impl UniformGrid {
         // thickness.
         let e = raw.extent();
         let pad = (e.max_element() * 1e-6)
-            .max(raw.min.abs().max(raw.max.abs()).max_element() * 1e-12)
+            .max(raw.magnitude() * 1e-12)
             .max(1e-300);
         let bounds = Aabb {
             min: raw.min - DVec3::splat(pad),
             max: raw.max + DVec3::splat(pad),
         };
-        let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element();
+        let magnitude = bounds.magnitude();
         // The rounding of the rays the grid is built for; cells no finer than 1024 of
         // it, so that growing them by 4 of it (below) keeps them nearly disjoint.
         let tau = ROUNDING * (options.ray_origins.abs() + magnitude);

@@ -56,6 +56,17 @@ impl Aabb {
         !(self.min.x <= self.max.x && self.min.y <= self.max.y && self.min.z <= self.max.z)
     }
 
+    /// The largest absolute coordinate of the box (the scale of the rounding of points
+    /// in it); 0 for an empty box.
+    #[must_use]
+    pub fn magnitude(&self) -> f64 {
+        if self.is_empty() {
+            0.0
+        } else {
+            self.min.abs().max(self.max.abs()).max_element()
+        }
+    }
+
     /// The centre.
     #[must_use]
     pub fn center(&self) -> DVec3 {

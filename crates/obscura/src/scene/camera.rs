@@ -240,14 +240,15 @@ impl Camera {
     pub fn validate_window(&self, viewport: Viewport, magnitude: f64) -> Result<()> {
         if let Projection::Orthographic { height } = self.projection {
             let pixel = height / f64::from(viewport.height.max(1));
-            let floor = 4.0 * f64::EPSILON * magnitude.max(self.eye.abs().max_element());
+            let magnitude = magnitude.max(self.eye.abs().max_element());
+            let floor = 4.0 * f64::EPSILON * magnitude;
             if pixel < floor {
                 return Err(Error::InvalidCamera(format!(
                     "orthographic height {height:e} over {} rows: a pixel spans {pixel:.1e}, \
-                     below what coordinates as large as {:.1e} resolve in double precision \
-                     ({floor:.1e}); widen the view or move the scene nearer the origin",
+                     below what coordinates as large as {magnitude:.1e} resolve in double \
+                     precision ({floor:.1e}); widen the view or move the scene nearer the \
+                     origin",
                     viewport.height,
-                    magnitude.max(self.eye.abs().max_element()),
                 )));
             }
         }

@@ -516,7 +516,7 @@ impl<'a> Setup<'a> {
         let scale = if b.is_empty() {
             1.0
         } else {
-            b.min.abs().max(b.max.abs()).max_element() + b.extent().max_element()
+            b.magnitude() + b.extent().max_element()
         };
         let vp = view.viewport();
         let rays = PrimaryRays::new(camera, vp).with_fill_rule(fill);
