@@ -832,6 +832,60 @@ fn depth_is_the_eye_space_distance() {
     }
 }
 
+/// A ground plane far larger than the objects in view (a sphere on a plain up to 10^7
+/// wide, seen from 4 units): the BVH's box test allows for rounding relative to each
+/// distance, not to the scene's extent, so the ground costs the traversal about what
+/// any other one big polygon does. With a margin from the largest coordinate of the
+/// scene, every box near the camera grew by 2^-17 of 10^7 (76 units) and each ray
+/// visited most of the sphere's tree.
+#[test]
+fn a_distant_ground_does_not_slow_the_bvh() {
+    let sphere = || {
+        ObjectDesc::new("sphere", demo::uv_sphere_mesh(1.0, 96, 48))
+            .with_closed(true)
+            .with_convex(true)
+    };
+    let mut alone = Scene::new();
+    alone.add(sphere()).unwrap();
+    let cam = Camera::perspective(
+        DVec3::new(0.0, 1.0, 4.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        45.0,
+        0.1,
+        100.0,
+    );
+    let visits = |scene: &Scene| {
+        let out = frames(
+            scene,
+            &cam,
+            96,
+            72,
+            BackfaceMode::Closed,
+            &[Algorithm::ZBuffer, Algorithm::RaycastBvh],
+            &RenderOptions::default(),
+        );
+        assert_agrees("raycast-bvh", &out[0].1, &out[1].1, 1.0);
+        out[1].2.get("node_visits_per_ray").unwrap()
+    };
+    let base = visits(&alone);
+    for width in [1e3, 1e5, 1e7] {
+        let mut grounded = Scene::new();
+        grounded.add(sphere()).unwrap();
+        grounded
+            .add(
+                ObjectDesc::new("ground", demo::grid_mesh(width, width, 1, 1))
+                    .with_transform(DMat4::from_translation(DVec3::new(0.0, -1.5, 0.0))),
+            )
+            .unwrap();
+        let with_ground = visits(&grounded);
+        assert!(
+            with_ground < 1.5 * base + 2.0,
+            "ground {width}: {with_ground} node visits per ray, {base} without it"
+        );
+    }
+}
+
 #[test]
 fn stats_report_the_figures_of_each_variant() {
     let scene = demo::default_scene();

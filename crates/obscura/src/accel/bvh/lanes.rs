@@ -19,7 +19,7 @@
 use glam::DVec3;
 
 use super::packet::{CHUNK, Frustum, Mask, PACKET, RayPacket};
-use super::traverse::{max, min};
+use super::traverse::{WIDEN, max, min, widen_down, widen_up};
 use super::{BvhNode, WIDTH};
 use crate::accel::triangles::AxisOrder;
 
@@ -117,7 +117,7 @@ impl Lanes for Portable {
         }
         let mut out = 0;
         for k in 0..WIDTH {
-            out |= u32::from(near[k] <= far[k]) << k;
+            out |= u32::from(widen_down(near[k]) <= widen_up(far[k])) << k;
         }
         out
     }
@@ -160,7 +160,8 @@ impl Lanes for Portable {
         }
         let mut entered = 0;
         for r in 0..PACKET {
-            entered |= Mask::from(near[r] <= far[r]) << r;
+            near[r] = widen_down(near[r]);
+            entered |= Mask::from(near[r] <= widen_up(far[r])) << r;
         }
         let entered = entered & mask;
         // The smallest entry of the rays that enter.
@@ -233,7 +234,7 @@ mod x86 {
 
     use glam::DVec3;
 
-    use super::{BvhNode, CHUNK, Frustum, Lanes, Mask, PACKET, RayPacket};
+    use super::{BvhNode, CHUNK, Frustum, Lanes, Mask, PACKET, RayPacket, WIDEN};
     use crate::accel::triangles::AxisOrder;
 
     /// AVX-512 lanes. A value exists only on a processor with AVX-512 F and VL (and the
@@ -342,6 +343,11 @@ mod x86 {
                     _mm256_max_ps(_mm256_mul_ps(dx, i0), _mm256_mul_ps(dx, i1)),
                 );
             }
+            // `x ∓ γ |x|`, as `widen_down` and `widen_up` compute it.
+            let gamma = _mm256_set1_ps(WIDEN);
+            let abs = |x| _mm256_andnot_ps(_mm256_set1_ps(-0.0), x);
+            let near = _mm256_sub_ps(near, _mm256_mul_ps(abs(near), gamma));
+            let far = _mm256_add_ps(far, _mm256_mul_ps(abs(far), gamma));
             u32::from(_mm256_cmp_ps_mask::<_CMP_LE_OQ>(near, far))
         }
     }
@@ -375,6 +381,10 @@ mod x86 {
                 near = _mm512_max_ps(near, _mm512_min_ps(a, b));
                 far = _mm512_min_ps(far, _mm512_max_ps(a, b));
             }
+            // `x ∓ γ |x|`, as `widen_down` and `widen_up` compute it.
+            let gamma = _mm512_set1_ps(WIDEN);
+            let near = _mm512_sub_ps(near, _mm512_mul_ps(_mm512_abs_ps(near), gamma));
+            let far = _mm512_add_ps(far, _mm512_mul_ps(_mm512_abs_ps(far), gamma));
             let entered = _mm512_mask_cmp_ps_mask::<_CMP_LE_OQ>(mask as u16, near, far);
             let first = _mm512_mask_reduce_min_ps(entered, near);
             (Mask::from(entered), first)

@@ -66,7 +66,7 @@ use glam::DVec3;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::Avx512;
 use super::lanes::{Lanes, Portable};
-use super::traverse::{Kernel, MARGIN, TraceCounters, TraversalStack, max, min};
+use super::traverse::{Kernel, TraceCounters, TraversalStack, margin, max, min};
 use super::{Bvh, MAX_DEPTH, WIDTH, f32_down, f32_up};
 use crate::accel::triangles::{
     AxisOrder, ClosestHit, HitContext, TieRule, WatertightRay, WithAxisOrder, dispatch_order,
@@ -311,7 +311,7 @@ impl RayPacket {
             // The largest of three finite numbers, whatever the order of comparisons.
             let m = if x > y { x } else { y };
             let m = if m > z { m } else { z };
-            delta[r] = (m + scale) * MARGIN;
+            delta[r] = margin(m, scale);
         }
         for k in 0..3 {
             for r in 0..PACKET {

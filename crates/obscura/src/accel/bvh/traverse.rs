@@ -2,13 +2,30 @@
 //!
 //! # Box test in single precision, made conservative
 //! The nodes' boxes are `f32`, rounded outwards from the `f64` triangles. The ray is
-//! converted to `f32` too, so the slab distances carry rounding errors of a few ulp of
-//! `|box| + |origin|`. To never miss a box the exact ray enters, every box is grown by a
-//! margin `δ = 2^-17 (|origin|∞ + scale)` (`scale` = the largest coordinate of the
-//! scene), about 20 times the worst error. The margin costs nothing per test: the lower
-//! planes are met at `(min - (o + δ)) / d` and the upper ones at `(max - (o - δ)) / d`,
-//! so two shifted origins are computed once per ray (Ize 2013 makes the same point for
-//! `tmax *= 1 + 2γ`). Zero direction components get an inverse of `±10^30` (not
+//! converted to `f32` too, and a slab distance `(plane - origin) / direction` carries
+//! two kinds of rounding error: the origin's conversion, a few ulp of `|origin|` in
+//! space, and a relative error of at most three roundings of the distance itself (the
+//! subtraction, the inverse direction and the product). The test covers both, so it
+//! never misses a box the exact ray meets:
+//! - every box is grown by a margin `δ = 2^-17 (|origin|∞ + 2^-30 scale)` (`scale` =
+//!   the largest coordinate of the scene), over 100 times the origin's rounding. It
+//!   costs nothing per test: the lower planes are met at `(min - (o + δ)) / d` and the
+//!   upper ones at `(max - (o - δ)) / d`, so two shifted origins are computed once per
+//!   ray. (The `2^-30 scale` floor only matters for directions with a component under
+//!   `10^-30`, whose inverse is clamped: see below.)
+//! - the entry and exit distances are widened by their relative error bound: the box
+//!   is entered when `near - γ |near| <= far + γ |far|`, `γ = 2^-18` (about 20 times
+//!   the three roundings), and the widened entry is what is returned. Both sides
+//!   widened keep the test valid whatever the signs (a negative near limit, as an
+//!   orthographic camera's near plane behind the eye gives).
+//!
+//! Why not one margin for both: a margin in space must cover the relative error at the
+//! largest distance a box can be, so it grows with the scene (`2^-17 (|origin| +
+//! scale)` was the rule before). With a ground quad 10^7 wide it grew every box near
+//! the camera by 76 units, and ray casting a sphere on it was 145 times slower. A
+//! relative widening costs a few operations per node and grows each box only in
+//! proportion to its own distance (Ize 2013 makes the same point: `tmax *= 1 + 2γ`).
+//! Zero direction components get an inverse of `±10^30` (not
 //! infinity), so no `0 · ∞` NaN can appear and plain comparisons suffice.
 //!
 //! # Order
@@ -74,8 +91,35 @@ impl Default for TraversalStack {
     }
 }
 
-/// The margin of the box test relative to the coordinates (see the module doc).
+/// The margin of the box test relative to the origin's coordinates (see the module
+/// doc).
 pub(super) const MARGIN: f64 = 1.0 / 131_072.0;
+
+/// The part of the scene's largest coordinate in the margin (see the module doc).
+const SCALE_FLOOR: f64 = 1.0 / 1_073_741_824.0;
+
+/// The relative widening `γ` of the box test's entry and exit distances (see the
+/// module doc).
+pub(super) const WIDEN: f32 = 1.0 / 262_144.0;
+
+/// The margin `δ` of the box test for a ray whose origin's largest absolute coordinate
+/// is `origin_max`, through boxes whose coordinates are at most `scale`.
+#[inline(always)]
+pub(super) fn margin(origin_max: f64, scale: f64) -> f64 {
+    (origin_max + scale * SCALE_FLOOR) * MARGIN
+}
+
+/// `x` moved down by its relative error bound: `x - γ |x|` (see the module doc).
+#[inline(always)]
+pub(super) fn widen_down(x: f32) -> f32 {
+    x - x.abs() * WIDEN
+}
+
+/// `x` moved up by its relative error bound: `x + γ |x|`.
+#[inline(always)]
+pub(super) fn widen_up(x: f32) -> f32 {
+    x + x.abs() * WIDEN
+}
 
 /// A ray prepared for the single-precision slab test.
 ///
@@ -98,7 +142,7 @@ pub struct BoxRay {
 /// upper planes from the second, which grows every box by `δ` on each side.
 #[inline]
 pub(super) fn shifted_origins(origin: DVec3, scale: f64) -> ([f32; 3], [f32; 3]) {
-    let delta = (origin.abs().max_element() + scale) * MARGIN;
+    let delta = margin(origin.abs().max_element(), scale);
     let lower = (origin + delta).to_array().map(|x| x as f32);
     let upper = (origin - delta).to_array().map(|x| x as f32);
     (lower, upper)
@@ -139,7 +183,8 @@ impl BoxRay {
     }
 
     /// The entry distances into the eight (grown) boxes of a node where the ray meets
-    /// them within `[t_min, t_max]`, `+inf` where it does not.
+    /// them within `[t_min, t_max]`, `+inf` where it does not (both widened by the
+    /// relative error bound: see the module doc).
     // The shape of this function is what lets the compiler turn it into a few 8-lane
     // instructions. Seemingly neutral rewrites (a tree-shaped min/max reduction, arrays
     // built with `from_fn`) were measured to halve the traversal speed by breaking the
@@ -167,8 +212,9 @@ impl BoxRay {
         }
         let mut out = [f32::INFINITY; WIDTH];
         for k in 0..WIDTH {
-            if near[k] <= far[k] {
-                out[k] = near[k];
+            let (lo, hi) = (widen_down(near[k]), widen_up(far[k]));
+            if lo <= hi {
+                out[k] = lo;
             }
         }
         out
@@ -437,40 +483,67 @@ mod tests {
 
     #[test]
     fn box_test_never_misses_a_box_the_exact_ray_crosses() {
-        // Rays aimed at random points of a box's surface, from near and far origins:
-        // the single-precision test must report a hit every time.
+        // Rays aimed at random points of a box's faces, edges and corners (grazing
+        // rays), from near and far origins (and from near the origin of coordinates,
+        // where the margin in space is nearly zero and the relative widening does the
+        // work), with boxes from 1e-4 to 1e4 across placed up to 1e6 from the origin
+        // of coordinates, directions of any length, and boxes ahead of the origin or
+        // behind it (a negative near limit). The single-precision test must report
+        // every box, entered no later than the exact ray enters it.
         let mut rng = demo::SplitMix64(4);
-        for _ in 0..2000 {
-            let lo = DVec3::new(
-                rng.range(-5.0, 5.0),
-                rng.range(-5.0, 5.0),
-                rng.range(-5.0, 5.0),
-            );
-            let hi = lo
-                + DVec3::new(
-                    rng.range(0.0, 2.0),
-                    rng.range(0.0, 2.0),
-                    rng.range(0.0, 2.0),
-                );
+        let f32_exact = |v: f64| f64::from(v as f32);
+        for case in 0..20_000 {
+            let size: f64 = [1e-4, 1.0, 1e4][case % 3];
+            let offset = [0.0, 1.0, 1e3, 1e6][(case / 3) % 4] * size.max(1.0);
+            let centre = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0) * offset;
+            let v = |rng: &mut demo::SplitMix64, a: f64, b: f64| {
+                DVec3::new(rng.range(a, b), rng.range(a, b), rng.range(a, b))
+            };
+            // Box corners that are `f32` values, so the node holds the box exactly.
+            let lo = (centre + v(&mut rng, -5.0, 5.0) * size).map(f32_exact);
+            let hi = (lo + v(&mut rng, 0.0, 2.0) * size).map(f32_exact);
             let mut node = BvhNode::default();
             for axis in 0..3 {
-                node.min[axis][2] = f32_down(lo[axis]);
-                node.max[axis][2] = f32_up(hi[axis]);
+                node.min[axis][2] = lo[axis] as f32;
+                node.max[axis][2] = hi[axis] as f32;
             }
-            // A point on a face (one coordinate at its bound).
+            // A point on a face, an edge or a corner (one to three coordinates at
+            // their bounds).
             let mut p = lo + (hi - lo) * DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64());
-            let k = (rng.next_u64() % 3) as usize;
-            p[k] = if rng.next_f64() < 0.5 { lo[k] } else { hi[k] };
+            let pinned = 1 + case % 3;
+            let first = (rng.next_u64() % 3) as usize;
+            for j in 0..pinned {
+                let k = (first + j) % 3;
+                p[k] = if rng.next_f64() < 0.5 { lo[k] } else { hi[k] };
+            }
             let far = rng.next_f64() < 0.3;
-            let o = DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            ) * if far { 1e4 } else { 20.0 };
-            let d = p - o;
-            let ray = BoxRay::new(o, d, 7.0);
-            let t = ray.entries(&node, 0.0, 2.0);
-            assert!(t[2] <= 1.0, "missed {p:?} from {o:?}");
+            // From near the origin of coordinates (the margin is then nearly all
+            // reach), or from around the box.
+            let o = if case % 4 == 0 {
+                v(&mut rng, -1.0, 1.0) * size * 1e-6
+            } else {
+                p + v(&mut rng, -1.0, 1.0) * size * if far { 1e4 } else { 20.0 }
+            };
+            // The ray reaches `p` at `t_p`, within its limits.
+            let length = [1e-3, 1.0, 1e3][(case / 12) % 3];
+            let behind = case % 5 == 0;
+            let (d, t_p) = if behind {
+                ((o - p) * length, -1.0 / length)
+            } else {
+                ((p - o) * length, 1.0 / length)
+            };
+            let (t_min, t_max) = if behind {
+                (1.5 * t_p, 0.5 * t_p)
+            } else {
+                (0.0, 1.5 * t_p)
+            };
+            let ray = BoxRay::new(o, d, 1e4);
+            let t = ray.entries(&node, f32_down(t_min), f32_up(t_max));
+            assert!(
+                f64::from(t[2]) <= t_p,
+                "case {case}: missed {p:?} from {o:?} (entry {})",
+                t[2]
+            );
             // Empty slots are never entered.
             assert_eq!([t[0], t[1], t[3]], [f32::INFINITY; 3]);
         }
