@@ -26,8 +26,9 @@
 //! from the extreme shifted origin times the range of `1 / d`, the largest exit
 //! likewise (Boulos et al., "Geometric and Arithmetic Culling Methods for Entire Ray
 //! Packets", 2006). Rounding is monotone, so each ray's own `f32` distances lie within
-//! these `f32` bounds: a child whose bounds do not overlap is entered by no ray, and
-//! the eight children are culled so in one 8-lane test before any per-ray test.
+//! these `f32` bounds, and so do their widened values (`x ∓ γ |x|` is monotone): a
+//! child whose widened bounds do not overlap is entered by no ray, and the eight
+//! children are culled so in one 8-lane test before any per-ray test.
 //!
 //! # Order
 //! The children a packet enters are visited nearest first by the smallest entry
