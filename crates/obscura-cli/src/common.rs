@@ -355,3 +355,18 @@ pub fn progress_bar(name: &str) -> (indicatif::ProgressBar, obscura::surface::Pr
         std::sync::Arc::new(move |f| bar.set_position((f * 1000.0) as u64));
     (pb, feed)
 }
+
+/// A note for a uniform grid that put many of the scene's triangles in one cell (a
+/// small dense object in a large scene, the uniform grid's known weakness), from the
+/// stats of `raycast-grid`; `None` for other stats and balanced grids.
+pub fn grid_note(stats: &obscura::Stats) -> Option<String> {
+    let largest = stats.get("largest_cell")?;
+    let average = stats.get("refs_per_cell")?;
+    (largest >= 4096.0 && largest >= 1000.0 * average.max(1.0)).then(|| {
+        format!(
+            "one cell of the uniform grid holds {largest} triangles ({average:.1} on \
+             average): a small dense object in a large scene, which uniform cells handle \
+             badly; --algo raycast-bvh adapts to such scenes"
+        )
+    })
+}

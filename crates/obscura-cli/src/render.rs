@@ -10,6 +10,7 @@ use obscura::{Result, prepare};
 use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
+use crate::errln;
 use crate::out::outln;
 use crate::outputs::Outputs;
 
@@ -104,6 +105,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bar.finish_and_clear();
     }
     let (stages, frame, stats, render_ms, prepare_ms) = rendered?;
+    if let Some(note) = crate::common::grid_note(&stats) {
+        errln!("note: {note}");
+    }
 
     let image = match args.image {
         ImageView::Shaded => frame.shade(scene, &camera),

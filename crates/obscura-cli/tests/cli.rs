@@ -120,6 +120,39 @@ fn seed_task_renders_at_its_own_size() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A dense sphere on a wide ground: the uniform grid puts the sphere in a few cells and
+/// the CLI says so (with what to use instead); the BVH renders it without a note, and
+/// a scene of evenly spread boxes gets no note from the grid either.
+#[test]
+fn a_grid_with_one_crowded_cell_gets_a_note() {
+    let dir = tempdir("grid-note");
+    std::fs::write(
+        dir.join("stadium.toml"),
+        "[camera]\neye = [0, 1, 4]\ntarget = [0, 0, 0]\nnear = 0.1\nfar = 100\n\
+         [[object]]\nname = \"ground\"\nprimitive = \"grid\"\nwidth = 1000\n\
+         depth = 1000\ntranslate = [0, -1.5, 0]\n\
+         [[object]]\nprimitive = \"sphere\"\nsegments = 160\nrings = 80\n",
+    )
+    .unwrap();
+    let note = "note: one cell of the uniform grid holds";
+    let run = |scene: &str, algo: &str| {
+        let o = obscura(
+            &[
+                "render", scene, "--algo", algo, "--size", "40x30", "-o", "x.png",
+            ],
+            &dir,
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let grid = run("stadium.toml", "raycast-grid");
+    assert!(grid.contains(note), "{grid}");
+    assert!(grid.contains("--algo raycast-bvh"), "{grid}");
+    assert!(!run("stadium.toml", "raycast-bvh").contains(note));
+    assert!(!run("demo:city", "raycast-grid").contains(note));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn absurd_sizes_and_bad_input_get_clear_errors() {
     let dir = tempdir("errors");

@@ -469,6 +469,7 @@ pub fn render_grid(
     stats.set("refs", g.refs as f64);
     stats.set("refs_per_cell", per(g.refs as u64, g.cells as u64));
     stats.set("empty_cells", g.empty_cells as f64);
+    stats.set("largest_cell", g.largest_cell as f64);
     stats.set("cells_per_ray", per(counters.cells, counters.rays));
     stats.set(
         "triangle_tests_per_ray",
