@@ -377,10 +377,12 @@ impl Camera {
 
     /// Sets `near` and `far` to hold the whole box as seen along the view direction,
     /// with a margin: `far` 1 % past the farthest corner; `near` 1 % before the
-    /// nearest corner, but for a perspective camera at least `far / 10^6` (an eye
-    /// inside the box, or that close to it: whatever lies nearer than a millionth of
+    /// nearest corner, but for a perspective camera at least `far / 10^9` (an eye
+    /// inside the box, or that close to it: whatever lies nearer than a billionth of
     /// the farthest corner's distance is cut away; the depth keys `near / depth` keep
-    /// their relative precision at any ratio); for
+    /// their relative precision at any ratio, so the floor only keeps `near` positive,
+    /// and a low one keeps objects near the eye in scenes of vast extent: with
+    /// `far / 10^6`, a ground 10^7 wide put the near plane 14 units away); for
     /// an orthographic one it may be negative (planes behind the eye are seen). Nothing
     /// changes when the box is empty or the camera has no view direction (eye on the
     /// target, or not finite): [`Camera::validate`] reports that.
@@ -418,7 +420,7 @@ impl Camera {
             size * 1e-3
         };
         self.near = match self.projection {
-            Projection::Perspective { .. } => (lo * 0.99).max(far * 1e-6),
+            Projection::Perspective { .. } => (lo * 0.99).max(far * 1e-9),
             Projection::Orthographic { .. } => lo - size * 0.01,
         };
         self.far = far;
@@ -527,10 +529,22 @@ mod tests {
             .map(|p| (p - c.eye).dot(forward))
             .fold(f64::MIN, f64::max);
         assert!(c.far > farthest && c.far < farthest * 1.02, "{}", c.far);
-        assert!(c.near <= c.far * 1e-6 * 1.000_001, "{} {}", c.near, c.far);
+        assert!(c.near <= c.far * 1e-9 * 1.000_001, "{} {}", c.near, c.far);
         // The box's nearest point is about 3 units along the view axis.
         assert!(c.near < 0.1, "{}", c.near);
         c.validate().unwrap();
+        // A ground 10^7 across (the near plane was 14 with a floor of far / 10^6)
+        // and 10^9 across.
+        for width in [1e7, 1e9] {
+            let ground = Aabb {
+                min: DVec3::new(-width / 2.0, -1.5, -width / 2.0),
+                max: DVec3::new(width / 2.0, 1.0, width / 2.0),
+            };
+            c.fit_depth_range(&ground);
+            assert!(c.near < 2.0, "ground {width}: near {}", c.near);
+            assert!(c.far > width * 0.45, "ground {width}: far {}", c.far);
+            c.validate().unwrap();
+        }
     }
 
     #[test]
@@ -636,12 +650,12 @@ mod tests {
         assert_eq!(c.near, 3.0 * 0.99);
         assert_eq!(c.far, 5.0 * 1.01 + size * 1e-6);
         assert!(c.validate().is_ok());
-        // The eye inside the box: the near plane keeps 10^6 : 1.
+        // The eye inside the box: the near plane keeps 10^9 : 1.
         let mut inside = Camera::perspective(DVec3::ZERO, DVec3::X, DVec3::Z, 60.0, 1.0, 2.0);
         inside.fit_depth_range(&b);
         let far = 1.0 * 1.01 + size * 1e-6;
         assert_eq!(inside.far, far);
-        assert_eq!(inside.near, far * 1e-6);
+        assert_eq!(inside.near, far * 1e-9);
         // Orthographic: the near plane may be behind the eye.
         let mut ortho = Camera {
             projection: Projection::Orthographic { height: 2.0 },
