@@ -327,6 +327,12 @@ pub struct Fragment {
     pub thickness: f64,
     start: u32,
     len: u32,
+    /// The fragment of the whole polygon (itself if never split).
+    root: u32,
+    /// The splits that made it: entries `cuts[cut_start..cut_start + cut_len]` of the
+    /// tree (see [`BspTree::fragment_cuts`]).
+    cut_start: u32,
+    cut_len: u32,
 }
 
 /// A node: a plane, the fragments lying in it (none for an axis-aligned plane that
@@ -386,6 +392,8 @@ pub struct BspTree {
     fragments: Vec<Fragment>,
     fragment_vertices: Vec<u32>,
     vertices: Vec<BspVertex>,
+    /// The splits of the fragments: `node << 1 | front` (see [`BspTree::fragment_cuts`]).
+    cuts: Vec<u32>,
     /// Per vertex, its position in the tree's frame (world minus `origin`).
     local: Vec<DVec3>,
     /// The world point at the origin of the tree's frame.
@@ -446,6 +454,7 @@ impl BspTree {
             fragments: Vec::new(),
             fragment_vertices: Vec::new(),
             vertices: Vec::new(),
+            cuts: Vec::new(),
             local: Vec::new(),
             origin: DVec3::ZERO,
             vertex_base: Vec::with_capacity(scene.objects().len()),
@@ -515,6 +524,9 @@ impl BspTree {
                     thickness,
                     start,
                     len: idx.len() as u32,
+                    root: tree.fragments.len() as u32,
+                    cut_start: 0,
+                    cut_len: 0,
                 });
             }
         }
@@ -568,7 +580,7 @@ impl BspTree {
                     Side::Back => back.push(f),
                     Side::On => on.push(f),
                     Side::Spanning => {
-                        let (a, b) = self.split(f, &plane, eps, &mut points);
+                        let (a, b) = self.split(f, n, &plane, eps, &mut points);
                         front.extend(a);
                         back.extend(b);
                     }
@@ -803,10 +815,12 @@ impl BspTree {
         }
     }
 
-    /// Splits fragment `f` by the plane; returns the new front and back fragments.
+    /// Splits fragment `f` by the plane of node `node`; returns the new front and back
+    /// fragments.
     fn split(
         &mut self,
         f: u32,
+        node: u32,
         plane: &Plane,
         eps: f64,
         points: &mut Vec<DVec3>,
@@ -821,8 +835,8 @@ impl BspTree {
             Split::Spanning { front, back } => {
                 self.stats.splits += 1;
                 let mut made = Vec::new();
-                let a = self.push_piece(&frag, &idx, points, &front, &mut made);
-                let b = self.push_piece(&frag, &idx, points, &back, &mut made);
+                let a = self.push_piece(&frag, &idx, points, &front, &mut made, node << 1 | 1);
+                let b = self.push_piece(&frag, &idx, points, &back, &mut made, node << 1);
                 (Some(a), Some(b))
             }
         }
@@ -830,7 +844,8 @@ impl BspTree {
 
     /// Adds a piece of `parent`: points equal to a parent vertex reuse its index (so
     /// pieces keep the exact projection of the original vertices), new points become
-    /// new vertices, shared by both pieces through `made`.
+    /// new vertices, shared by both pieces through `made`. The piece's cuts are its
+    /// parent's and `cut`.
     fn push_piece(
         &mut self,
         parent: &Fragment,
@@ -838,6 +853,7 @@ impl BspTree {
         parent_points: &[DVec3],
         piece: &[DVec3],
         made: &mut Vec<(DVec3, u32)>,
+        cut: u32,
     ) -> u32 {
         let start = self.fragment_vertices.len() as u32;
         for &q in piece {
@@ -859,9 +875,15 @@ impl BspTree {
             self.fragment_vertices.push(v);
         }
         self.spheres.push(bounding_sphere(piece));
+        let cut_start = self.cuts.len() as u32;
+        let inherited = parent.cut_start as usize..(parent.cut_start + parent.cut_len) as usize;
+        self.cuts.extend_from_within(inherited);
+        self.cuts.push(cut);
         self.fragments.push(Fragment {
             start,
             len: piece.len() as u32,
+            cut_start,
+            cut_len: parent.cut_len + 1,
             ..*parent
         });
         (self.fragments.len() - 1) as u32
@@ -919,6 +941,27 @@ impl BspTree {
     #[must_use]
     pub fn fragment_vertex_indices(&self, i: u32) -> &[u32] {
         self.fragment_indices(&self.fragments[i as usize])
+    }
+
+    /// The fragment of the whole polygon fragment `i` is a piece of (`i` itself if the
+    /// polygon was never split).
+    #[must_use]
+    pub fn fragment_root(&self, i: u32) -> u32 {
+        self.fragments[i as usize].root
+    }
+
+    /// The splits that cut fragment `i` out of its whole polygon
+    /// ([`BspTree::fragment_root`]), first to last: per split, the node whose plane cut
+    /// it and whether the fragment is the piece on the plane's front (positive) side.
+    /// The fragment is the part of the whole polygon on those sides of those planes
+    /// (up to the rounding of its vertices): the painter draws it so, as the whole
+    /// polygon's pixels on those sides, and the pieces of one polygon then cover each
+    /// of its pixels exactly once (see [`crate::surface::bsp`]).
+    pub fn fragment_cuts(&self, i: u32) -> impl ExactSizeIterator<Item = (u32, bool)> + '_ {
+        let f = &self.fragments[i as usize];
+        self.cuts[f.cut_start as usize..(f.cut_start + f.cut_len) as usize]
+            .iter()
+            .map(|&c| (c >> 1, c & 1 == 1))
     }
 
     /// The world-space points of fragment `i`.

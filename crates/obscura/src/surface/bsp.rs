@@ -16,6 +16,11 @@
 //!   pipeline's rule (per mesh polygon, with the same eye-space normal), and fragments
 //!   of objects the pipeline culls by their bounds are skipped (all their points are
 //!   outside the view volume, so this changes nothing but time).
+//! - A fragment that is a piece of a split polygon is painted as the pixels of the
+//!   whole polygon on its sides of the node planes that cut it
+//!   ([`BspTree::fragment_cuts`], [`crate::surface::paint`]): the pieces of a polygon
+//!   then cover each of its pixels exactly once. Painted by their own vertices, a
+//!   piece cut again left a crack along the edge its sibling kept whole.
 //! - Traversal ([`BspOptions::traversal`](crate::accel::bsp::BspOptions)):
 //!   back-to-front overwrites (the painter's algorithm); front-to-back (the default)
 //!   writes each pixel once and stops when the image is full. Front to back, a
@@ -43,7 +48,7 @@ use crate::accel::bsp::{BspTraversal, BspTree, BspVisitor, Viewpoint};
 use crate::clip::outcode_homogeneous;
 use crate::cull::frustum::{Containment, classify_aabb, classify_sphere, frustum_planes};
 use crate::geom::newell_normal;
-use crate::surface::paint::{PaintMode, Painter};
+use crate::surface::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewTransform, ViewVertex};
 use crate::{Error, Frame, Result};
@@ -176,9 +181,52 @@ struct Visitor<'a> {
     /// already painted (front to back only: everything after is farther).
     cull_subtrees: bool,
     counts: Counts,
+    rays: PixelRays,
     eye_pts: Vec<DVec3>,
     clip_pts: Vec<glam::DVec4>,
     screen: Vec<ViewVertex>,
+    whole: Vec<ViewVertex>,
+    cuts: Vec<ScreenCut>,
+}
+
+impl Visitor<'_> {
+    /// Clips and projects the tree vertices `indices` (eye positions from the view
+    /// data) into `out`; false when nothing of the polygon is inside the view volume.
+    fn project(&mut self, indices: &[u32], whole: bool) -> bool {
+        let (data, t) = (self.data, self.t);
+        self.eye_pts.clear();
+        self.eye_pts
+            .extend(indices.iter().map(|&v| data.eye[v as usize]));
+        self.clip_pts.clear();
+        let (mut and, mut or) = (0x3f, 0);
+        for &e in &self.eye_pts {
+            let c = t.eye_to_clip(e);
+            let code = outcode_homogeneous(c);
+            and &= code;
+            or |= code;
+            self.clip_pts.push(c);
+        }
+        let out = if whole {
+            &mut self.whole
+        } else {
+            &mut self.screen
+        };
+        out.clear();
+        if and != 0 {
+            return false;
+        }
+        if or == 0 {
+            out.extend(
+                self.clip_pts
+                    .iter()
+                    .zip(&self.eye_pts)
+                    .map(|(&c, &e)| t.to_screen(c, e)),
+            );
+            true
+        } else {
+            t.clip_and_project(&self.eye_pts, out) != 0
+        }
+    }
 }
 
 impl BspVisitor for Visitor<'_> {
@@ -230,45 +278,35 @@ impl BspVisitor for Visitor<'_> {
 
     fn fragment(&mut self, f: u32) -> ControlFlow<()> {
         self.counts.visited += 1;
-        let (tree, data, t) = (self.tree, self.data, self.t);
+        let (tree, data) = (self.tree, self.data);
         let frag = tree.fragment(f);
         let k = frag.object as usize;
         if !data.visible[k] || data.back_facing[data.polygon_base[k] + frag.polygon as usize] {
             self.counts.culled += 1;
             return ControlFlow::Continue(());
         }
-        self.eye_pts.clear();
-        self.eye_pts.extend(
-            tree.fragment_vertex_indices(f)
-                .iter()
-                .map(|&v| data.eye[v as usize]),
-        );
-        self.clip_pts.clear();
-        let (mut and, mut or) = (0x3f, 0);
-        for &e in &self.eye_pts {
-            let c = t.eye_to_clip(e);
-            let code = outcode_homogeneous(c);
-            and &= code;
-            or |= code;
-            self.clip_pts.push(c);
-        }
-        self.screen.clear();
-        if and != 0 {
+        if !self.project(tree.fragment_vertex_indices(f), false) {
             self.counts.outside += 1;
             return ControlFlow::Continue(());
         }
-        if or == 0 {
-            self.screen.extend(
-                self.clip_pts
-                    .iter()
-                    .zip(&self.eye_pts)
-                    .map(|(&c, &e)| t.to_screen(c, e)),
-            );
-        } else if t.clip_and_project(&self.eye_pts, &mut self.screen) == 0 {
-            self.counts.outside += 1;
-            return ControlFlow::Continue(());
+        if tree.fragment_cuts(f).len() == 0 {
+            self.painter.paint_vertices(&self.screen, frag.face);
+        } else {
+            // A piece of a split polygon: the whole polygon's pixels on the piece's
+            // sides of its cuts (see the module doc).
+            let region = piece_region(&self.screen, self.t.width, self.t.height);
+            if !self.project(tree.fragment_vertex_indices(tree.fragment_root(f)), true) {
+                self.counts.outside += 1;
+                return ControlFlow::Continue(());
+            }
+            self.cuts.clear();
+            for (node, front) in tree.fragment_cuts(f) {
+                let cut = self.rays.cut(&frag.plane, &tree.node(node).plane, front);
+                self.cuts.push(cut);
+            }
+            self.painter
+                .paint_piece_of(&self.whole, region, &self.cuts, frag.face);
         }
-        self.painter.paint_vertices(&self.screen, frag.face);
         if self.painter.is_complete() {
             ControlFlow::Break(())
         } else {
@@ -323,9 +361,12 @@ pub fn render_with_tree(
         painter: &mut painter,
         cull_subtrees: traversal == BspTraversal::FrontToBack,
         counts: Counts::default(),
+        rays: PixelRays::new(view, DMat4::from_translation(-tree.origin())),
         eye_pts: Vec::new(),
         clip_pts: Vec::new(),
         screen: Vec::new(),
+        whole: Vec::new(),
+        cuts: Vec::new(),
     };
     let done = tree.traverse_with(viewpoint, traversal, &mut v);
     let counts = v.counts;

@@ -24,10 +24,21 @@
 //! is the eye-space depth of the polygon's depth-key plane at the pixel centre,
 //! computed as the z-buffer does (key stepped along the span, stored through `f32`).
 //!
+//! A piece of a polygon that the caller cut by planes (BSP's and depth sort's
+//! splits) can be painted as the pixels of the *whole* polygon that lie on its sides of
+//! the cuts ([`Painter::paint_piece`], with [`ScreenCut`]s): the pieces of one polygon
+//! then cover each of its pixels exactly once, where painting each piece's own
+//! vertices would leave cracks at T-junctions (a piece cut again puts a rounded vertex
+//! on the edge its sibling shares, and a pixel centre on that edge falls between them).
+//!
 //! Cost: O(rows + pixels) per polygon.
 
+use glam::{DMat4, DVec3};
+
+use crate::accel::triangles::PrimaryRays;
 use crate::frame::BACKGROUND;
-use crate::raster::{DepthPlane, FillRule, PolygonCoverage};
+use crate::geom::Plane;
+use crate::raster::{DepthPlane, FillRule, PixelRect, PolygonCoverage};
 use crate::view::{PreparedView, ViewTransform, ViewVertex};
 use crate::{Frame, Result};
 
@@ -63,6 +74,107 @@ pub(crate) struct Painter {
     /// The `f32` depth key of each painted pixel (0 where nothing is), kept unless the
     /// painter is write-once: [`PaintMode::DepthTest`] compares with it.
     keys: Vec<f32>,
+}
+
+/// A half-plane of the image: the pixels whose centre `(sx, sy)` gives
+/// `a sx + b sy + c >= 0` when `non_negative`, `< 0` (or NaN) otherwise. A cut and its
+/// opposite (the same numbers, the other side) split any set of pixels in two, each
+/// pixel on exactly one side: the expression is evaluated the same way for both.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ScreenCut {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+    pub non_negative: bool,
+}
+
+impl ScreenCut {
+    /// Whether pixel `(x, y)` is on the cut's side.
+    #[inline]
+    fn keeps(&self, x: u32, y: u32) -> bool {
+        let v = self.a * (f64::from(x) + 0.5) + self.b * (f64::from(y) + 0.5) + self.c;
+        (v >= 0.0) == self.non_negative
+    }
+}
+
+/// The pixel rays of a view in some frame (the BSP tree's, eye space), as affine
+/// functions of the pixel centre `(sx, sy)`: origin `o0 + sx ox + sy oy`, direction
+/// `r0 + sx rx + sy ry` (a perspective camera's origin is fixed, an orthographic
+/// one's direction). They give the [`ScreenCut`] of a plane across a polygon.
+pub(crate) struct PixelRays {
+    orthographic: bool,
+    o: [DVec3; 3],
+    r: [DVec3; 3],
+}
+
+impl PixelRays {
+    /// The view's rays (world space, [`PrimaryRays`]) carried into the frame of
+    /// `to_frame` (an affine map of world space).
+    pub fn new(view: &PreparedView<'_>, to_frame: DMat4) -> Self {
+        let rays = PrimaryRays::new(view.camera(), view.viewport());
+        let (o0, r0) = rays.ray(0.0, 0.0);
+        let (o1, r1) = rays.ray(1.0, 0.0);
+        let (o2, r2) = rays.ray(0.0, 1.0);
+        let v = |d: DVec3| to_frame.transform_vector3(d);
+        PixelRays {
+            orthographic: o1 != o0 || o2 != o0,
+            o: [to_frame.transform_point3(o0), v(o1 - o0), v(o2 - o0)],
+            r: [v(r0), v(r1 - r0), v(r2 - r0)],
+        }
+    }
+
+    /// The cut of a piece of a polygon of plane `m` by the plane `n` (both in the
+    /// rays' frame), keeping the side `front` (`n` positive): the pixels whose ray meets plane `m` at
+    /// a point on that side of `n`. The sign of `n` at that point is an affine function
+    /// of the pixel centre: with `E_n = n(o)`, `E_m = m(o)` for a fixed origin it is
+    /// the sign of `(E_n m - E_m n) . r` times that of `-E_m` (the hit lies ahead of
+    /// the eye); for a fixed direction, of `(m.r) n(o) - (n.r) m(o)` times that of
+    /// `m.r`. A plane through the eye (or along the rays) puts every pixel in front.
+    pub fn cut(&self, m: &Plane, n: &Plane, front: bool) -> ScreenCut {
+        let (a, b, c) = if self.orthographic {
+            let (mr, nr) = (m.normal.dot(self.r[0]), n.normal.dot(self.r[0]));
+            let s = if mr < 0.0 { -1.0 } else { 1.0 };
+            let w = (n.normal * mr - m.normal * nr) * s;
+            let k = (n.d * mr - m.d * nr) * s;
+            (w.dot(self.o[1]), w.dot(self.o[2]), w.dot(self.o[0]) + k)
+        } else {
+            let (en, em) = (n.evaluate(self.o[0]), m.evaluate(self.o[0]));
+            let s = if em > 0.0 { -1.0 } else { 1.0 };
+            let w = (m.normal * en - n.normal * em) * s;
+            (w.dot(self.r[1]), w.dot(self.r[2]), w.dot(self.r[0]))
+        };
+        ScreenCut {
+            a,
+            b,
+            c,
+            non_negative: front,
+        }
+    }
+}
+
+/// The pixels that may hold samples of a piece projected to `screen`: its box widened
+/// by two pixels (far above the rounding of its split vertices), within a `width x
+/// height` image.
+pub(crate) fn piece_region(screen: &[ViewVertex], width: f64, height: f64) -> PixelRect {
+    let (mut minx, mut miny, mut maxx, mut maxy) = (
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for v in screen {
+        minx = minx.min(v.x);
+        maxx = maxx.max(v.x);
+        miny = miny.min(v.y);
+        maxy = maxy.max(v.y);
+    }
+    let clamp = |v: f64, hi: f64| v.clamp(0.0, hi) as u32;
+    PixelRect {
+        x0: clamp((minx - 2.0).floor(), width),
+        y0: clamp((miny - 2.0).floor(), height),
+        x1: clamp((maxx + 2.0).ceil(), width),
+        y1: clamp((maxy + 2.0).ceil(), height),
+    }
 }
 
 /// Side of the coverage blocks of write-once painting, in pixels.
@@ -141,15 +253,83 @@ impl Painter {
             .all(|&n| n == 0)
     }
 
-    /// Paints a convex polygon given by screen points, with depth keys from `plane`.
-    /// Returns the number of pixels written.
-    pub fn paint(&mut self, screen: &[(f64, f64)], plane: &DepthPlane, face: u32) -> u64 {
-        let (w, h) = (self.frame.width, self.frame.height);
-        let once = self.mode == PaintMode::WriteOnce;
-        if once && self.occluded(screen) {
+    /// [`Painter::paint_piece`] with the whole polygon given by its projected vertices
+    /// (the depth plane through them gives the keys, as [`Painter::paint_vertices`]).
+    pub fn paint_piece_of(
+        &mut self,
+        whole: &[ViewVertex],
+        region: PixelRect,
+        cuts: &[ScreenCut],
+        face: u32,
+    ) -> u64 {
+        self.keyed.clear();
+        self.keyed.extend(whole.iter().map(|v| (v.x, v.y, v.zq)));
+        let Some(plane) = DepthPlane::from_points(&self.keyed) else {
+            return 0;
+        };
+        self.screen.clear();
+        self.screen.extend(whole.iter().map(|v| (v.x, v.y)));
+        let screen = std::mem::take(&mut self.screen);
+        let n = self.paint_piece(&screen, &plane, region, cuts, face);
+        self.screen = screen;
+        n
+    }
+
+    /// Paints a piece of a convex polygon: the pixels of the whole polygon (screen
+    /// points `whole`, depth keys from `plane`) inside `region` and on the side of
+    /// every cut. `region` must hold every pixel of the piece (the caller widens the
+    /// piece's own box: [`piece_region`]). Returns the number of pixels written.
+    pub fn paint_piece(
+        &mut self,
+        whole: &[(f64, f64)],
+        plane: &DepthPlane,
+        region: PixelRect,
+        cuts: &[ScreenCut],
+        face: u32,
+    ) -> u64 {
+        if self.mode == PaintMode::WriteOnce
+            && self.box_covered(
+                f64::from(region.x0),
+                f64::from(region.y0),
+                f64::from(region.x1),
+                f64::from(region.y1),
+            )
+        {
             self.polygons_occluded += 1;
             return 0;
         }
+        self.paint_within(whole, plane, face, region, cuts)
+    }
+
+    /// Paints a convex polygon given by screen points, with depth keys from `plane`.
+    /// Returns the number of pixels written.
+    pub fn paint(&mut self, screen: &[(f64, f64)], plane: &DepthPlane, face: u32) -> u64 {
+        if self.mode == PaintMode::WriteOnce && self.occluded(screen) {
+            self.polygons_occluded += 1;
+            return 0;
+        }
+        let all = PixelRect {
+            x0: 0,
+            y0: 0,
+            x1: u32::MAX,
+            y1: u32::MAX,
+        };
+        self.paint_within(screen, plane, face, all, &[])
+    }
+
+    /// [`Painter::paint`] restricted to the pixels of `region` on the side of every
+    /// cut. The keys are stepped along each row of the whole polygon as without a
+    /// restriction, so a pixel gets the same key whichever piece paints it.
+    fn paint_within(
+        &mut self,
+        screen: &[(f64, f64)],
+        plane: &DepthPlane,
+        face: u32,
+        region: PixelRect,
+        cuts: &[ScreenCut],
+    ) -> u64 {
+        let (w, h) = (self.frame.width, self.frame.height);
+        let once = self.mode == PaintMode::WriteOnce;
         let Some(coverage) = PolygonCoverage::new(screen, self.fill, w, h) else {
             return 0;
         };
@@ -158,14 +338,18 @@ impl Painter {
         let mut any = false;
         let r = coverage.rect();
         let (bx0, bx1) = (r.x0 / BLOCK, (r.x1 - 1) / BLOCK + 1);
-        for y in r.y0..r.y1 {
+        let whole = cuts.is_empty() && region.x0 == 0 && region.x1 >= r.x1;
+        for y in r.y0.max(region.y0)..r.y1.min(region.y1) {
             if once && self.blocks_full(y / BLOCK, bx0, bx1) {
                 continue;
             }
             let Some((x0, x1)) = coverage.row_span(y) else {
                 continue;
             };
-            any = true;
+            // The pixels of the span the restriction keeps.
+            let keep = |x: u32| {
+                whole || (region.x0 <= x && x < region.x1 && cuts.iter().all(|c| c.keeps(x, y)))
+            };
             let row = y as usize * width;
             let mut z = plane.at(f64::from(x0) + 0.5, f64::from(y) + 0.5);
             let mut row_written = 0u32;
@@ -173,7 +357,9 @@ impl Painter {
                 let block_row = (y / BLOCK) as usize * self.blocks_x;
                 for x in x0..x1 {
                     let k = row + x as usize;
-                    if self.frame.ids[k] == BACKGROUND {
+                    let kept = keep(x);
+                    any |= kept;
+                    if kept && self.frame.ids[k] == BACKGROUND {
                         self.frame.ids[k] = face;
                         self.frame.depth[k] = self.transform.depth_of_key(z as f32);
                         self.block_uncovered[block_row + (x / BLOCK) as usize] -= 1;
@@ -183,10 +369,13 @@ impl Painter {
                 }
                 self.uncovered -= u64::from(row_written);
             } else if self.mode == PaintMode::DepthTest {
-                for k in row + x0 as usize..row + x1 as usize {
+                for x in x0..x1 {
+                    let k = row + x as usize;
                     let zf = z as f32;
                     let old = self.keys[k];
-                    if zf > old || (zf == old && face < self.frame.ids[k]) {
+                    let kept = keep(x);
+                    any |= kept;
+                    if kept && (zf > old || (zf == old && face < self.frame.ids[k])) {
                         self.keys[k] = zf;
                         self.frame.ids[k] = face;
                         self.frame.depth[k] = self.transform.depth_of_key(zf);
@@ -195,13 +384,18 @@ impl Painter {
                     z += plane.dzdx;
                 }
             } else {
-                for k in row + x0 as usize..row + x1 as usize {
-                    self.keys[k] = z as f32;
-                    self.frame.ids[k] = face;
-                    self.frame.depth[k] = self.transform.depth_of_key(z as f32);
+                for x in x0..x1 {
+                    let kept = keep(x);
+                    any |= kept;
+                    if kept {
+                        let k = row + x as usize;
+                        self.keys[k] = z as f32;
+                        self.frame.ids[k] = face;
+                        self.frame.depth[k] = self.transform.depth_of_key(z as f32);
+                        row_written += 1;
+                    }
                     z += plane.dzdx;
                 }
-                row_written = x1 - x0;
             }
             written += u64::from(row_written);
         }

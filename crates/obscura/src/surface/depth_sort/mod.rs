@@ -47,10 +47,14 @@
 //!   viewpoint at the eye for perspective, at infinity along +z for parallel
 //!   projections) and their projections. Output: a [`Frame`] equal to the z-buffer's.
 //! - Splitting is done in eye space with [`split_polygon`](crate::clip::split) and
-//!   the new vertices projected; vertices kept from the original keep their exact
-//!   screen position, and both pieces share the new ones (watertight).
+//!   the new vertices projected (for the tests that follow); each piece records the
+//!   planes that cut it and its sides of them.
 //! - Painting: back to front, overwriting ([`crate::raster::PolygonCoverage`], the
-//!   shared top-left rule); pieces use their original polygon's depth-key plane.
+//!   shared top-left rule). A piece is painted as the pixels of its whole polygon (its
+//!   coverage and depth-key plane) on its sides of its cuts
+//!   ([`crate::surface::paint`]), so the pieces of a polygon cover each of its pixels
+//!   exactly once: painted by their own vertices, a piece cut again left a crack along
+//!   the edge its sibling kept whole (a T-junction).
 //! - Candidates: a grid of screen tiles (about twice the median polygon box) lists
 //!   the polygons touching each tile, so a polygon is compared only with polygons
 //!   whose boxes may overlap its own; for Newell's variant each tile lists them
@@ -86,7 +90,7 @@ mod matrix;
 mod newell;
 mod work;
 
-use crate::surface::paint::{PaintMode, Painter};
+use crate::surface::paint::{PaintMode, Painter, PixelRays, piece_region};
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewVertex};
 use crate::{Frame, Result};
@@ -222,6 +226,12 @@ fn render_variant(
 ) -> Result<(Frame, Stats)> {
     let mut painter = Painter::new(view, options.fill_rule, PaintMode::Overwrite)?;
     let mut screen = Vec::new();
+    let rays = PixelRays::new(view, view.transform().view);
+    let (width, height) = (
+        f64::from(view.viewport().width),
+        f64::from(view.viewport().height),
+    );
+    let mut cuts = Vec::new();
     let mut stats = run(view, options, variant, &mut |ws, i| {
         let Some(plane) = ws.depth_plane(i) else {
             return;
@@ -229,9 +239,22 @@ fn render_variant(
         if ws.fallback {
             painter.set_mode(PaintMode::DepthTest);
         }
-        screen.clear();
-        screen.extend(ws.vertices(i).iter().map(|v| (v.x, v.y)));
-        painter.paint(&screen, plane, ws.polys[i as usize].face);
+        let face = ws.polys[i as usize].face;
+        if ws.cuts(i).is_empty() {
+            screen.clear();
+            screen.extend(ws.vertices(i).iter().map(|v| (v.x, v.y)));
+            painter.paint(&screen, plane, face);
+        } else {
+            // A piece: the whole polygon's pixels on its sides of its cuts, so the
+            // pieces of a polygon cover each of its pixels once (see `paint`).
+            let m = ws.polys[i as usize].plane;
+            cuts.clear();
+            cuts.extend(ws.cuts(i).iter().map(|(n, front)| rays.cut(&m, n, *front)));
+            let region = piece_region(ws.vertices(i), width, height);
+            screen.clear();
+            screen.extend(ws.whole_vertices(i).iter().map(|v| (v.x, v.y)));
+            painter.paint_piece(&screen, plane, region, &cuts, face);
+        }
     });
     stats.set("polygons_painted", painter.polygons_painted as f64);
     stats.set("pixels_written", painter.pixels_written as f64);

@@ -24,6 +24,12 @@ pub(super) struct Poly {
     pub source: u32,
     start: u32,
     len: u32,
+    /// The polygon of the whole view polygon (itself unless it is a piece).
+    root: u32,
+    /// Its cuts: `cuts[cut_start..cut_start + cut_len]` of the set (see
+    /// [`WorkSet::cuts`]).
+    cut_start: u32,
+    cut_len: u32,
     /// Eye-space plane, unit normal, oriented so the viewpoint is on its positive side.
     pub plane: Plane,
     /// Distance within which a point counts as on `plane` by this polygon's own scale
@@ -111,6 +117,9 @@ pub(super) struct WorkSet {
     /// then on are depth-tested against what is painted (see `super::render_variant`).
     pub fallback: bool,
     scratch: Vec<DVec3>,
+    /// The splits that made the pieces: the plane that cut and whether the piece is
+    /// on its positive side.
+    cuts: Vec<(Plane, bool)>,
 }
 
 impl WorkSet {
@@ -130,6 +139,7 @@ impl WorkSet {
             view_polygons: view.polygon_count(),
             fallback: false,
             scratch: Vec::new(),
+            cuts: Vec::new(),
         };
         let mut screen = Vec::new();
         for (i, poly) in view.polygons().enumerate() {
@@ -166,6 +176,9 @@ impl WorkSet {
                 source: i as u32,
                 start,
                 len: poly.len() as u32,
+                root: ws.polys.len() as u32,
+                cut_start: 0,
+                cut_len: 0,
                 plane,
                 eps: base_eps + thickness,
                 rect: cov.rect(),
@@ -180,6 +193,20 @@ impl WorkSet {
     pub fn vertices(&self, i: u32) -> &[ViewVertex] {
         let p = &self.polys[i as usize];
         &self.verts[p.start as usize..(p.start + p.len) as usize]
+    }
+
+    /// The projected vertices of the whole view polygon polygon `i` is a piece of (its
+    /// own if it is not a piece).
+    pub fn whole_vertices(&self, i: u32) -> &[ViewVertex] {
+        self.vertices(self.polys[i as usize].root)
+    }
+
+    /// The splits that cut polygon `i` out of its view polygon, first to last: the
+    /// plane (eye space) and whether the piece is on its positive side. Empty for a
+    /// polygon that is not a piece.
+    pub fn cuts(&self, i: u32) -> &[(Plane, bool)] {
+        let p = &self.polys[i as usize];
+        &self.cuts[p.cut_start as usize..(p.cut_start + p.cut_len) as usize]
     }
 
     /// The depth-key plane polygon `i` is painted with (its source's).
@@ -329,16 +356,23 @@ impl WorkSet {
         eye.extend(self.vertices(i).iter().map(|v| v.eye));
         let split = split_polygon(&eye, &plane, eps);
         let result = match split {
-            Split::Spanning { front, back } => {
-                Some([front, back].map(|piece| self.push_piece(&parent, &eye, &piece)))
-            }
+            Split::Spanning { front, back } => Some(
+                [(front, true), (back, false)]
+                    .map(|(piece, side)| self.push_piece(&parent, &eye, &piece, (plane, side))),
+            ),
             _ => None,
         };
         self.scratch = eye;
         result
     }
 
-    fn push_piece(&mut self, parent: &Poly, parent_eye: &[DVec3], piece: &[DVec3]) -> u32 {
+    fn push_piece(
+        &mut self,
+        parent: &Poly,
+        parent_eye: &[DVec3],
+        piece: &[DVec3],
+        cut: (Plane, bool),
+    ) -> u32 {
         let start = self.verts.len() as u32;
         let t = self.transform;
         for &e in piece {
@@ -365,12 +399,18 @@ impl WorkSet {
             |c| c.rect(),
         );
         let (dmin, dmax) = depth_extent(piece);
+        let cut_start = self.cuts.len() as u32;
+        let inherited = parent.cut_start as usize..(parent.cut_start + parent.cut_len) as usize;
+        self.cuts.extend_from_within(inherited);
+        self.cuts.push(cut);
         self.polys.push(Poly {
             start,
             len: piece.len() as u32,
             rect,
             dmin,
             dmax,
+            cut_start,
+            cut_len: parent.cut_len + 1,
             ..*parent
         });
         (self.polys.len() - 1) as u32
