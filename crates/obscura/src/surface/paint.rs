@@ -76,23 +76,39 @@ pub(crate) struct Painter {
     keys: Vec<f32>,
 }
 
-/// A half-plane of the image: the pixels whose centre `(sx, sy)` gives
-/// `a sx + b sy + c >= 0` when `non_negative`, `< 0` (or NaN) otherwise. A cut and its
-/// opposite (the same numbers, the other side) split any set of pixels in two, each
-/// pixel on exactly one side: the expression is evaluated the same way for both.
+/// One side of a plane `n` across a polygon of plane `m`, as the pixels whose ray meets
+/// `m` at a point on that side: `n` at that point is `V = E + t G`, with `E = n(o)`
+/// and `G = n . r` for the pixel's ray `o + t r`, and `t = -m(o) / (m . r)` where the
+/// ray meets `m`. `E`, `G` and the numerator and denominator of `t` are affine in the
+/// pixel centre `(sx, sy)`: each is kept as `[c, cx, cy]` for `c + cx sx + cy sy`. The
+/// cut keeps the pixels with `V >= 0` when `non_negative`, the others (`V < 0` or NaN)
+/// otherwise.
+///
+/// Consistency: a cut and its opposite (the same numbers, the other side) split any
+/// set of pixels in two, each pixel on exactly one side, since `V` is evaluated the
+/// same way for both. And the cuts of one plane across different polygons agree on
+/// the side of the pixels whose ray lies in the plane (a plane seen edge-on: the
+/// viewpoint in it): there `E` and `G` are the same numbers for every polygon, so
+/// their signs, not the polygon's `t >= 0`, decide; with an affine form per polygon,
+/// such a pixel fell on one side for one polygon and on the other for the next, and
+/// the farther one could be painted first.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ScreenCut {
-    pub a: f64,
-    pub b: f64,
-    pub c: f64,
-    pub non_negative: bool,
+    e: [f64; 3],
+    g: [f64; 3],
+    num: [f64; 3],
+    den: [f64; 3],
+    non_negative: bool,
 }
 
 impl ScreenCut {
     /// Whether pixel `(x, y)` is on the cut's side.
     #[inline]
     fn keeps(&self, x: u32, y: u32) -> bool {
-        let v = self.a * (f64::from(x) + 0.5) + self.b * (f64::from(y) + 0.5) + self.c;
+        let (sx, sy) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+        let at = |c: &[f64; 3]| c[0] + c[1] * sx + c[2] * sy;
+        let t = -at(&self.num) / at(&self.den);
+        let v = at(&self.e) + t * at(&self.g);
         (v >= 0.0) == self.non_negative
     }
 }
@@ -102,7 +118,6 @@ impl ScreenCut {
 /// `r0 + sx rx + sy ry` (a perspective camera's origin is fixed, an orthographic
 /// one's direction). They give the [`ScreenCut`] of a plane across a polygon.
 pub(crate) struct PixelRays {
-    orthographic: bool,
     o: [DVec3; 3],
     r: [DVec3; 3],
 }
@@ -117,36 +132,27 @@ impl PixelRays {
         let (o2, r2) = rays.ray(0.0, 1.0);
         let v = |d: DVec3| to_frame.transform_vector3(d);
         PixelRays {
-            orthographic: o1 != o0 || o2 != o0,
             o: [to_frame.transform_point3(o0), v(o1 - o0), v(o2 - o0)],
             r: [v(r0), v(r1 - r0), v(r2 - r0)],
         }
     }
 
     /// The cut of a piece of a polygon of plane `m` by the plane `n` (both in the
-    /// rays' frame), keeping the side `front` (`n` positive): the pixels whose ray meets plane `m` at
-    /// a point on that side of `n`. The sign of `n` at that point is an affine function
-    /// of the pixel centre: with `E_n = n(o)`, `E_m = m(o)` for a fixed origin it is
-    /// the sign of `(E_n m - E_m n) . r` times that of `-E_m` (the hit lies ahead of
-    /// the eye); for a fixed direction, of `(m.r) n(o) - (n.r) m(o)` times that of
-    /// `m.r`. A plane through the eye (or along the rays) puts every pixel in front.
+    /// rays' frame), keeping the side `front` (`n` positive): see [`ScreenCut`].
     pub fn cut(&self, m: &Plane, n: &Plane, front: bool) -> ScreenCut {
-        let (a, b, c) = if self.orthographic {
-            let (mr, nr) = (m.normal.dot(self.r[0]), n.normal.dot(self.r[0]));
-            let s = if mr < 0.0 { -1.0 } else { 1.0 };
-            let w = (n.normal * mr - m.normal * nr) * s;
-            let k = (n.d * mr - m.d * nr) * s;
-            (w.dot(self.o[1]), w.dot(self.o[2]), w.dot(self.o[0]) + k)
-        } else {
-            let (en, em) = (n.evaluate(self.o[0]), m.evaluate(self.o[0]));
-            let s = if em > 0.0 { -1.0 } else { 1.0 };
-            let w = (m.normal * en - n.normal * em) * s;
-            (w.dot(self.r[1]), w.dot(self.r[2]), w.dot(self.r[0]))
+        let affine = |p: &Plane, at: &[DVec3; 3], point: bool| {
+            let d = if point { p.d } else { 0.0 };
+            [
+                p.normal.dot(at[0]) + d,
+                p.normal.dot(at[1]),
+                p.normal.dot(at[2]),
+            ]
         };
         ScreenCut {
-            a,
-            b,
-            c,
+            e: affine(n, &self.o, true),
+            g: affine(n, &self.r, false),
+            num: affine(m, &self.o, true),
+            den: affine(m, &self.r, false),
             non_negative: front,
         }
     }
