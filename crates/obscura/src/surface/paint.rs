@@ -158,22 +158,24 @@ impl PixelRays {
     }
 }
 
+/// The box `(min x, min y, max x, max y)` of screen points (infinities for none).
+fn screen_box(points: impl Iterator<Item = (f64, f64)>) -> (f64, f64, f64, f64) {
+    points.fold(
+        (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ),
+        |(x0, y0, x1, y1), (x, y)| (x0.min(x), y0.min(y), x1.max(x), y1.max(y)),
+    )
+}
+
 /// The pixels that may hold samples of a piece projected to `screen`: its box widened
 /// by two pixels (far above the rounding of its split vertices), within a `width x
 /// height` image.
 pub(crate) fn piece_region(screen: &[ViewVertex], width: f64, height: f64) -> PixelRect {
-    let (mut minx, mut miny, mut maxx, mut maxy) = (
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    );
-    for v in screen {
-        minx = minx.min(v.x);
-        maxx = maxx.max(v.x);
-        miny = miny.min(v.y);
-        maxy = maxy.max(v.y);
-    }
+    let (minx, miny, maxx, maxy) = screen_box(screen.iter().map(|v| (v.x, v.y)));
     let clamp = |v: f64, hi: f64| v.clamp(0.0, hi) as u32;
     PixelRect {
         x0: clamp((minx - 2.0).floor(), width),
@@ -238,6 +240,16 @@ impl Painter {
     /// Paints a convex polygon given by its projected vertices, with the depth plane
     /// through them. Returns the number of pixels written.
     pub fn paint_vertices(&mut self, vertices: &[ViewVertex], face: u32) -> u64 {
+        self.with_points(vertices, |p, screen, plane| p.paint(screen, plane, face))
+    }
+
+    /// Calls `paint` with the screen points of `vertices` and the depth plane through
+    /// them (0 pixels when they have none).
+    fn with_points(
+        &mut self,
+        vertices: &[ViewVertex],
+        paint: impl FnOnce(&mut Self, &[(f64, f64)], &DepthPlane) -> u64,
+    ) -> u64 {
         self.keyed.clear();
         self.keyed.extend(vertices.iter().map(|v| (v.x, v.y, v.zq)));
         let Some(plane) = DepthPlane::from_points(&self.keyed) else {
@@ -246,7 +258,7 @@ impl Painter {
         self.screen.clear();
         self.screen.extend(vertices.iter().map(|v| (v.x, v.y)));
         let screen = std::mem::take(&mut self.screen);
-        let n = self.paint(&screen, &plane, face);
+        let n = paint(self, &screen, &plane);
         self.screen = screen;
         n
     }
@@ -268,17 +280,9 @@ impl Painter {
         cuts: &[ScreenCut],
         face: u32,
     ) -> u64 {
-        self.keyed.clear();
-        self.keyed.extend(whole.iter().map(|v| (v.x, v.y, v.zq)));
-        let Some(plane) = DepthPlane::from_points(&self.keyed) else {
-            return 0;
-        };
-        self.screen.clear();
-        self.screen.extend(whole.iter().map(|v| (v.x, v.y)));
-        let screen = std::mem::take(&mut self.screen);
-        let n = self.paint_piece(&screen, &plane, region, cuts, face);
-        self.screen = screen;
-        n
+        self.with_points(whole, |p, screen, plane| {
+            p.paint_piece(screen, plane, region, cuts, face)
+        })
     }
 
     /// Paints a piece of a convex polygon: the pixels of the whole polygon (screen
@@ -413,18 +417,7 @@ impl Painter {
     /// Whether every block under the polygon's bounding box is already full (a
     /// conservative test: the box is widened to whole pixels).
     fn occluded(&self, screen: &[(f64, f64)]) -> bool {
-        let (mut minx, mut miny, mut maxx, mut maxy) = (
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY,
-        );
-        for &(x, y) in screen {
-            minx = minx.min(x);
-            maxx = maxx.max(x);
-            miny = miny.min(y);
-            maxy = maxy.max(y);
-        }
+        let (minx, miny, maxx, maxy) = screen_box(screen.iter().copied());
         self.box_covered(minx, miny, maxx, maxy)
     }
 
