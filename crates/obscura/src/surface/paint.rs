@@ -104,7 +104,7 @@ pub(crate) struct ScreenCut {
 impl ScreenCut {
     /// Whether pixel `(x, y)` is on the cut's side.
     #[inline]
-    fn keeps(&self, x: u32, y: u32) -> bool {
+    pub fn keeps(&self, x: u32, y: u32) -> bool {
         let (sx, sy) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
         let at = |c: &[f64; 3]| c[0] + c[1] * sx + c[2] * sy;
         let t = -at(&self.num) / at(&self.den);

@@ -90,7 +90,7 @@ mod matrix;
 mod newell;
 mod work;
 
-use crate::surface::paint::{PaintMode, Painter, PixelRays, piece_region};
+use crate::surface::paint::{PaintMode, Painter};
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewVertex};
 use crate::{Frame, Result};
@@ -226,12 +226,6 @@ fn render_variant(
 ) -> Result<(Frame, Stats)> {
     let mut painter = Painter::new(view, options.fill_rule, PaintMode::Overwrite)?;
     let mut screen = Vec::new();
-    let rays = PixelRays::new(view, view.transform().view);
-    let (width, height) = (
-        f64::from(view.viewport().width),
-        f64::from(view.viewport().height),
-    );
-    let mut cuts = Vec::new();
     let mut stats = run(view, options, variant, &mut |ws, i| {
         let Some(plane) = ws.depth_plane(i) else {
             return;
@@ -247,13 +241,10 @@ fn render_variant(
         } else {
             // A piece: the whole polygon's pixels on its sides of its cuts, so the
             // pieces of a polygon cover each of its pixels once (see `paint`).
-            let m = ws.polys[i as usize].plane;
-            cuts.clear();
-            cuts.extend(ws.cuts(i).iter().map(|(n, front)| rays.cut(&m, n, *front)));
-            let region = piece_region(ws.vertices(i), width, height);
             screen.clear();
             screen.extend(ws.whole_vertices(i).iter().map(|v| (v.x, v.y)));
-            painter.paint_piece(&screen, plane, region, &cuts, face);
+            let region = ws.polys[i as usize].rect;
+            painter.paint_piece(&screen, plane, region, ws.cuts(i), face);
         }
     });
     stats.set("polygons_painted", painter.polygons_painted as f64);

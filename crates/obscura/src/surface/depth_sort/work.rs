@@ -6,6 +6,7 @@ use glam::DVec3;
 use crate::clip::split::{Split, split_polygon};
 use crate::geom::Plane;
 use crate::raster::{DepthPlane, FillRule, PixelRect, PolygonCoverage};
+use crate::surface::paint::{PixelRays, ScreenCut, piece_region};
 use crate::view::{PreparedView, ViewTransform, ViewVertex};
 
 /// Relative tolerance of plane tests: a vertex within `RELATIVE_EPS * scale` of a
@@ -36,7 +37,8 @@ pub(super) struct Poly {
     /// (includes the original polygon's own deviation from it); a comparison with
     /// another polygon takes the larger of the two.
     pub eps: f64,
-    /// Pixels whose samples lie in its screen box (clipped to the image).
+    /// Pixels whose samples lie in its screen box (clipped to the image); for a
+    /// piece, the box of the samples it paints (see [`WorkSet::covers`]).
     pub rect: PixelRect,
     /// Eye-space depth extent.
     pub dmin: f64,
@@ -117,9 +119,13 @@ pub(super) struct WorkSet {
     /// then on are depth-tested against what is painted (see `super::render_variant`).
     pub fallback: bool,
     scratch: Vec<DVec3>,
-    /// The splits that made the pieces: the plane that cut and whether the piece is
-    /// on its positive side.
-    cuts: Vec<(Plane, bool)>,
+    /// The splits that made the pieces, as the cuts their pixels are painted with.
+    cuts: Vec<ScreenCut>,
+    /// The view's pixel rays in eye space (for the cuts).
+    rays: PixelRays,
+    /// Per polygon, the coverage of its whole view polygon, once computed (only
+    /// entries of whole polygons are used).
+    coverages: Vec<std::cell::OnceCell<Option<PolygonCoverage>>>,
 }
 
 impl WorkSet {
@@ -140,6 +146,8 @@ impl WorkSet {
             fallback: false,
             scratch: Vec::new(),
             cuts: Vec::new(),
+            rays: PixelRays::new(view, t.view),
+            coverages: Vec::new(),
         };
         let mut screen = Vec::new();
         for (i, poly) in view.polygons().enumerate() {
@@ -186,6 +194,7 @@ impl WorkSet {
                 dmax,
             });
         }
+        ws.coverages = vec![std::cell::OnceCell::new(); ws.polys.len()];
         ws
     }
 
@@ -201,10 +210,10 @@ impl WorkSet {
         self.vertices(self.polys[i as usize].root)
     }
 
-    /// The splits that cut polygon `i` out of its view polygon, first to last: the
-    /// plane (eye space) and whether the piece is on its positive side. Empty for a
-    /// polygon that is not a piece.
-    pub fn cuts(&self, i: u32) -> &[(Plane, bool)] {
+    /// The cuts of the splits that made polygon `i` out of its view polygon, first to
+    /// last (empty for a polygon that is not a piece): a piece paints the pixels of
+    /// its whole polygon on its side of every cut.
+    pub fn cuts(&self, i: u32) -> &[ScreenCut] {
         let p = &self.polys[i as usize];
         &self.cuts[p.cut_start as usize..(p.cut_start + p.cut_len) as usize]
     }
@@ -264,6 +273,9 @@ impl WorkSet {
     /// shared coverage rule (overlaps smaller than a pixel change nothing in the
     /// image).
     pub fn projections_overlap(&self, p: u32, q: u32) -> bool {
+        if !(self.cuts(p).is_empty() && self.cuts(q).is_empty()) {
+            return self.pieces_overlap(p, q);
+        }
         let (a, b) = (self.vertices(p), self.vertices(q));
         if separated(a, b) || separated(b, a) {
             return false;
@@ -312,6 +324,24 @@ impl WorkSet {
         false
     }
 
+    /// [`WorkSet::projections_overlap`] when `p` or `q` is a piece: whether a pixel in
+    /// both boxes is painted by both. A piece paints the pixels of its whole polygon
+    /// on its sides of its cuts, which may include samples on its own vertices' edges
+    /// that their coverage rule would leave out: the test must be on what is painted,
+    /// or two polygons painting the same pixel could be left unordered.
+    fn pieces_overlap(&self, p: u32, q: u32) -> bool {
+        let (a, b) = (&self.polys[p as usize].rect, &self.polys[q as usize].rect);
+        let (x0, x1) = (a.x0.max(b.x0), a.x1.min(b.x1));
+        let (y0, y1) = (a.y0.max(b.y0), a.y1.min(b.y1));
+        if x0 >= x1 || y0 >= y1 {
+            return false;
+        }
+        let (Some(cp), Some(cq)) = (self.whole_coverage(p), self.whole_coverage(q)) else {
+            return false;
+        };
+        (y0..y1).any(|y| (x0..x1).any(|x| self.covers(p, cp, x, y) && self.covers(q, cq, x, y)))
+    }
+
     /// Which of `p` and `q` is nearer where their projections overlap: the region
     /// both cover (`p`'s projection clipped by `q`'s edges) is convex and the
     /// difference of their depth keys is affine in screen space, so its signs at the
@@ -356,10 +386,12 @@ impl WorkSet {
         eye.extend(self.vertices(i).iter().map(|v| v.eye));
         let split = split_polygon(&eye, &plane, eps);
         let result = match split {
-            Split::Spanning { front, back } => Some(
-                [(front, true), (back, false)]
-                    .map(|(piece, side)| self.push_piece(&parent, &eye, &piece, (plane, side))),
-            ),
+            Split::Spanning { front, back } => {
+                Some([(front, true), (back, false)].map(|(piece, side)| {
+                    let cut = self.rays.cut(&parent.plane, &plane, side);
+                    self.push_piece(&parent, &eye, &piece, cut)
+                }))
+            }
             _ => None,
         };
         self.scratch = eye;
@@ -371,7 +403,7 @@ impl WorkSet {
         parent: &Poly,
         parent_eye: &[DVec3],
         piece: &[DVec3],
-        cut: (Plane, bool),
+        cut: ScreenCut,
     ) -> u32 {
         let start = self.verts.len() as u32;
         let t = self.transform;
@@ -384,36 +416,72 @@ impl WorkSet {
             };
             self.verts.push(v);
         }
-        let screen: Vec<(f64, f64)> = self.verts[start as usize..]
-            .iter()
-            .map(|v| (v.x, v.y))
-            .collect();
-        // A piece covering no sample gets an empty box: it overlaps nothing.
-        let rect = PolygonCoverage::new(&screen, self.fill, self.width, self.height).map_or(
-            PixelRect {
-                x0: 0,
-                y0: 0,
-                x1: 0,
-                y1: 0,
-            },
-            |c| c.rect(),
-        );
         let (dmin, dmax) = depth_extent(piece);
         let cut_start = self.cuts.len() as u32;
         let inherited = parent.cut_start as usize..(parent.cut_start + parent.cut_len) as usize;
         self.cuts.extend_from_within(inherited);
         self.cuts.push(cut);
+        let region = piece_region(
+            &self.verts[start as usize..],
+            f64::from(self.width),
+            f64::from(self.height),
+        );
         self.polys.push(Poly {
             start,
             len: piece.len() as u32,
-            rect,
+            rect: region,
             dmin,
             dmax,
             cut_start,
             cut_len: parent.cut_len + 1,
             ..*parent
         });
-        (self.polys.len() - 1) as u32
+        let i = (self.polys.len() - 1) as u32;
+        // The box of the samples it paints: a piece covering none gets an empty box
+        // (it overlaps nothing).
+        let empty = PixelRect {
+            x0: 0,
+            y0: 0,
+            x1: 0,
+            y1: 0,
+        };
+        let rect = self.whole_coverage(i).map_or(empty, |cov| {
+            let (mut x0, mut y0, mut x1, mut y1) = (u32::MAX, u32::MAX, 0, 0);
+            for y in region.y0..region.y1 {
+                for x in region.x0..region.x1 {
+                    if self.covers(i, cov, x, y) {
+                        (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
+                    }
+                }
+            }
+            if x0 < x1 {
+                PixelRect { x0, y0, x1, y1 }
+            } else {
+                empty
+            }
+        });
+        self.polys[i as usize].rect = rect;
+        i
+    }
+
+    /// The coverage of the whole view polygon polygon `i` is (a piece of).
+    fn whole_coverage(&self, i: u32) -> Option<&PolygonCoverage> {
+        let root = self.polys[i as usize].root;
+        self.coverages[root as usize]
+            .get_or_init(|| {
+                let screen: Vec<(f64, f64)> =
+                    self.vertices(root).iter().map(|v| (v.x, v.y)).collect();
+                PolygonCoverage::new(&screen, self.fill, self.width, self.height)
+            })
+            .as_ref()
+    }
+
+    /// Whether polygon `i` paints pixel `(x, y)`, given the coverage of its whole
+    /// polygon: covered by it, and on the piece's side of every cut (what the painter
+    /// paints; see `surface::paint`).
+    fn covers(&self, i: u32, whole: &PolygonCoverage, x: u32, y: u32) -> bool {
+        whole.row_span(y).is_some_and(|(a, b)| a <= x && x < b)
+            && self.cuts(i).iter().all(|c| c.keeps(x, y))
     }
 }
 
