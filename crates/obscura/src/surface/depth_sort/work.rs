@@ -38,7 +38,8 @@ pub(super) struct Poly {
     /// another polygon takes the larger of the two.
     pub eps: f64,
     /// Pixels whose samples lie in its screen box (clipped to the image); for a
-    /// piece, the box of the samples it paints (see [`WorkSet::covers`]).
+    /// piece, its vertices' box widened by two pixels, which holds every sample it
+    /// paints (its whole polygon's on its sides of its [`WorkSet::cuts`]).
     pub rect: PixelRect,
     /// Eye-space depth extent.
     pub dmin: f64,
@@ -268,18 +269,28 @@ impl WorkSet {
 
     /// Test 5, negated: whether the projections of `p` and `q` share a pixel sample.
     /// First the separating-axis test of two convex polygons (an edge line of either
-    /// polygon with the other on its outer side; touching counts as separated), then,
-    /// if no edge separates them, the exact check on the samples both cover under the
-    /// shared coverage rule (overlaps smaller than a pixel change nothing in the
-    /// image).
+    /// polygon with the other on its outer side; touching counts as separated unless
+    /// one is a piece), then, if no edge separates them, the exact check on the
+    /// samples both cover under the shared coverage rule (overlaps smaller than a
+    /// pixel change nothing in the image), and for pieces on the samples they paint.
     pub fn projections_overlap(&self, p: u32, q: u32) -> bool {
-        if !(self.cuts(p).is_empty() && self.cuts(q).is_empty()) {
-            return self.pieces_overlap(p, q);
-        }
         let (a, b) = (self.vertices(p), self.vertices(q));
-        if separated(a, b) || separated(b, a) {
+        // A piece paints samples within rounding of its own vertices' polygon, but
+        // maybe on its edges, which touching polygons share: pieces are separated
+        // only by a gap, and touching ones are checked on the samples they paint.
+        let pieces = !(self.cuts(p).is_empty() && self.cuts(q).is_empty());
+        let gap = if pieces { GAP } else { -TOUCH };
+        if separated(a, b, gap) || separated(b, a, gap) {
             return false;
         }
+        if self.own_samples_overlap(a, b) {
+            return true;
+        }
+        pieces && self.pieces_overlap(p, q)
+    }
+
+    /// Whether the coverages of the screen polygons `a` and `b` share a sample.
+    fn own_samples_overlap(&self, a: &[ViewVertex], b: &[ViewVertex]) -> bool {
         // Only samples in the box of the overlap region (widened far above rounding)
         // can be covered by both: most overlaps of small polygons hold none.
         let region = overlap_region(a, b);
@@ -339,7 +350,14 @@ impl WorkSet {
         let (Some(cp), Some(cq)) = (self.whole_coverage(p), self.whole_coverage(q)) else {
             return false;
         };
-        (y0..y1).any(|y| (x0..x1).any(|x| self.covers(p, cp, x, y) && self.covers(q, cq, x, y)))
+        let (kp, kq) = (self.cuts(p), self.cuts(q));
+        (y0..y1).any(|y| {
+            let (Some((a0, a1)), Some((b0, b1))) = (cp.row_span(y), cq.row_span(y)) else {
+                return false;
+            };
+            (a0.max(b0).max(x0)..a1.min(b1).min(x1))
+                .any(|x| kp.iter().all(|c| c.keeps(x, y)) && kq.iter().all(|c| c.keeps(x, y)))
+        })
     }
 
     /// Which of `p` and `q` is nearer where their projections overlap: the region
@@ -436,32 +454,7 @@ impl WorkSet {
             cut_len: parent.cut_len + 1,
             ..*parent
         });
-        let i = (self.polys.len() - 1) as u32;
-        // The box of the samples it paints: a piece covering none gets an empty box
-        // (it overlaps nothing).
-        let empty = PixelRect {
-            x0: 0,
-            y0: 0,
-            x1: 0,
-            y1: 0,
-        };
-        let rect = self.whole_coverage(i).map_or(empty, |cov| {
-            let (mut x0, mut y0, mut x1, mut y1) = (u32::MAX, u32::MAX, 0, 0);
-            for y in region.y0..region.y1 {
-                for x in region.x0..region.x1 {
-                    if self.covers(i, cov, x, y) {
-                        (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1));
-                    }
-                }
-            }
-            if x0 < x1 {
-                PixelRect { x0, y0, x1, y1 }
-            } else {
-                empty
-            }
-        });
-        self.polys[i as usize].rect = rect;
-        i
+        (self.polys.len() - 1) as u32
     }
 
     /// The coverage of the whole view polygon polygon `i` is (a piece of).
@@ -474,14 +467,6 @@ impl WorkSet {
                 PolygonCoverage::new(&screen, self.fill, self.width, self.height)
             })
             .as_ref()
-    }
-
-    /// Whether polygon `i` paints pixel `(x, y)`, given the coverage of its whole
-    /// polygon: covered by it, and on the piece's side of every cut (what the painter
-    /// paints; see `surface::paint`).
-    fn covers(&self, i: u32, whole: &PolygonCoverage, x: u32, y: u32) -> bool {
-        whole.row_span(y).is_some_and(|(a, b)| a <= x && x < b)
-            && self.cuts(i).iter().all(|c| c.keeps(x, y))
     }
 }
 
@@ -541,12 +526,14 @@ fn overlap_region(a: &[ViewVertex], b: &[ViewVertex]) -> Vec<(f64, f64)> {
     poly
 }
 
-/// Whether an edge line of convex polygon `a` has all of `b` on its outer side.
-/// Touching counts as separated (within a margin far above rounding): polygons that
-/// meet only along a line share no pixel sample except samples exactly on that line,
-/// which the coverage rule gives to one of them (or, for edges with different
-/// endpoints, decides by rounding: a near tie).
-fn separated(a: &[ViewVertex], b: &[ViewVertex]) -> bool {
+/// Whether an edge line of convex polygon `a` has all of `b` on its outer side, at
+/// least `gap` beyond it (relative to the screen coordinates). With a negative gap
+/// ([`TOUCH`]), touching counts as separated (within a margin far above rounding):
+/// polygons that meet only along a line share no pixel sample except samples exactly
+/// on that line, which the coverage rule gives to one of them (or, for edges with
+/// different endpoints, decides by rounding: a near tie). Pieces, which may paint
+/// such samples on their own edges, are separated only by a gap ([`GAP`]).
+fn separated(a: &[ViewVertex], b: &[ViewVertex], gap: f64) -> bool {
     let n = a.len();
     // Orientation of `a` (screen y is down, either winding is possible).
     let mut area2 = 0.0;
@@ -573,19 +560,27 @@ fn separated(a: &[ViewVertex], b: &[ViewVertex]) -> bool {
         if len == 0.0 {
             continue;
         }
-        let margin = 1e-9 * scale * len;
+        let margin = gap * scale * len;
         let amax = a.iter().fold(f64::NEG_INFINITY, |m, v| {
             m.max(nx * (v.x - p.x) + ny * (v.y - p.y))
         });
         let bmin = b.iter().fold(f64::INFINITY, |m, v| {
             m.min(nx * (v.x - p.x) + ny * (v.y - p.y))
         });
-        if bmin >= amax - margin {
+        if bmin >= amax + margin {
             return true;
         }
     }
     false
 }
+
+/// Polygons within this much of touching (relative to the screen coordinates) are
+/// [`separated`] (the coverage rule gives samples on a shared edge to one of them).
+const TOUCH: f64 = 1e-9;
+
+/// The gap that separates a piece from another polygon: far above the distance by
+/// which the samples a piece paints can lie outside its own vertices' polygon.
+const GAP: f64 = 1e-6;
 
 /// Screen tiles listing the polygons whose pixel box touches them, to find the
 /// polygons that may overlap a given one without looking at all.
