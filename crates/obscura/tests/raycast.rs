@@ -1162,3 +1162,49 @@ fn ray_casters_follow_the_fill_rule_on_edges() {
         }
     }
 }
+
+/// A triangle seen edge-on (its plane holds the eye) covers no sample, also when every
+/// edge is inclusive: the rays in its plane meet it only by rounding, with some of the
+/// three edge functions exactly zero. The inclusive rule once accepted them and drew a
+/// line of 13 pixels where the z-buffer drew nothing (differential fuzzer, seed
+/// 51010345; every coordinate dyadic, so the eye lies exactly in the plane).
+#[test]
+fn an_edge_on_triangle_covers_nothing_with_inclusive_edges() {
+    let mut scene = Scene::new();
+    let mut b = MeshBuilder::new();
+    for p in [
+        DVec3::new(10.625, 9.375, 0.0),
+        DVec3::new(10.625, 9.5, -2.5),
+        DVec3::new(10.5, 9.5, -3.75),
+    ] {
+        b.push_position(p);
+    }
+    b.push_face(&[0, 1, 2], None).unwrap();
+    scene
+        .add(ObjectDesc::new("edge-on", b.finish().0).with_closed(false))
+        .unwrap();
+    let camera = Camera::perspective(
+        DVec3::new(12.5, 9.375, 18.75),
+        DVec3::new(12.5, 9.375, 0.0),
+        DVec3::Y,
+        90.0,
+        2.34375,
+        45.5,
+    );
+    let view = prepare(
+        &scene,
+        &camera,
+        Viewport::new(200, 150).unwrap(),
+        &PrepareOptions::default(),
+    )
+    .unwrap();
+    for fill in [FillRule::TopLeft, FillRule::Inclusive] {
+        let opts = RenderOptions::default().with_fill_rule(fill);
+        let (z, _) = render(Algorithm::ZBuffer, &view, &opts).unwrap();
+        assert_eq!(z.covered_pixels(), 0, "{fill:?}");
+        for a in VARIANTS {
+            let (f, _) = render(a, &view, &opts).unwrap();
+            assert_eq!(f.covered_pixels(), 0, "{} with {fill:?}", a.name());
+        }
+    }
+}

@@ -355,9 +355,6 @@ impl TieRule {
     #[cold]
     #[must_use]
     pub fn accepts_edge(&self, p: DVec3, q: DVec3, r: DVec3) -> bool {
-        if self.inclusive {
-            return true;
-        }
         let (m, side) = if self.orthographic {
             let m = (q - p).cross(self.forward);
             (m, m.dot(r - p))
@@ -365,8 +362,15 @@ impl TieRule {
             let m = (p - self.eye).cross(q - self.eye);
             (m, m.dot(r - self.eye))
         };
+        // A triangle seen edge-on (its plane through the eye, or along the view
+        // direction) projects to a line and covers no sample, whatever the rule: the
+        // rays in its plane meet it only by rounding. (Every edge inclusive once
+        // accepted them, and an edge-on triangle showed as a line of pixels.)
         if side == 0.0 || !side.is_finite() {
             return false;
+        }
+        if self.inclusive {
+            return true;
         }
         let m = if side < 0.0 { -m } else { m };
         let gx = m.dot(self.right);
