@@ -348,7 +348,6 @@ impl Painter {
         let mut any = false;
         let r = coverage.rect();
         let (bx0, bx1) = (r.x0 / BLOCK, (r.x1 - 1) / BLOCK + 1);
-        let whole = cuts.is_empty() && region.x0 == 0 && region.x1 >= r.x1;
         for y in r.y0.max(region.y0)..r.y1.min(region.y1) {
             if once && self.blocks_full(y / BLOCK, bx0, bx1) {
                 continue;
@@ -357,9 +356,8 @@ impl Painter {
                 continue;
             };
             // The pixels of the span the restriction keeps.
-            let keep = |x: u32| {
-                whole || (region.x0 <= x && x < region.x1 && cuts.iter().all(|c| c.keeps(x, y)))
-            };
+            let keep =
+                |x: u32| region.x0 <= x && x < region.x1 && cuts.iter().all(|c| c.keeps(x, y));
             let row = y as usize * width;
             let mut z = plane.at(f64::from(x0) + 0.5, f64::from(y) + 0.5);
             let mut row_written = 0u32;

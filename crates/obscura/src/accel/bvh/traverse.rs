@@ -93,7 +93,7 @@ impl Default for TraversalStack {
 
 /// The margin of the box test relative to the origin's coordinates (see the module
 /// doc).
-pub(super) const MARGIN: f64 = 1.0 / 131_072.0;
+const MARGIN: f64 = 1.0 / 131_072.0;
 
 /// The part of the scene's largest coordinate in the margin (see the module doc).
 const SCALE_FLOOR: f64 = 1.0 / 1_073_741_824.0;

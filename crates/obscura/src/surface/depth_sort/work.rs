@@ -124,8 +124,8 @@ pub(super) struct WorkSet {
     cuts: Vec<ScreenCut>,
     /// The view's pixel rays in eye space (for the cuts).
     rays: PixelRays,
-    /// Per polygon, the coverage of its whole view polygon, once computed (only
-    /// entries of whole polygons are used).
+    /// Per polygon made from a view polygon (not the pieces, added after), the
+    /// coverage of its screen polygon, computed once when first needed.
     coverages: Vec<std::cell::OnceCell<Option<PolygonCoverage>>>,
 }
 
@@ -283,14 +283,26 @@ impl WorkSet {
         if separated(a, b, gap) || separated(b, a, gap) {
             return false;
         }
-        if self.own_samples_overlap(a, b) {
+        if self.own_samples_overlap(p, q) {
             return true;
         }
         pieces && self.pieces_overlap(p, q)
     }
 
-    /// Whether the coverages of the screen polygons `a` and `b` share a sample.
-    fn own_samples_overlap(&self, a: &[ViewVertex], b: &[ViewVertex]) -> bool {
+    /// The coverage of polygon `i`'s own vertices: its whole polygon's, computed once,
+    /// unless it is a piece.
+    fn own_coverage(&self, i: u32) -> Option<std::borrow::Cow<'_, PolygonCoverage>> {
+        if self.cuts(i).is_empty() {
+            return self.whole_coverage(i).map(std::borrow::Cow::Borrowed);
+        }
+        let screen: Vec<(f64, f64)> = self.vertices(i).iter().map(|v| (v.x, v.y)).collect();
+        PolygonCoverage::new(&screen, self.fill, self.width, self.height)
+            .map(std::borrow::Cow::Owned)
+    }
+
+    /// Whether the coverages of the own vertices of `p` and `q` share a sample.
+    fn own_samples_overlap(&self, p: u32, q: u32) -> bool {
+        let (a, b) = (self.vertices(p), self.vertices(q));
         // Only samples in the box of the overlap region (widened far above rounding)
         // can be covered by both: most overlaps of small polygons hold none.
         let region = overlap_region(a, b);
@@ -318,11 +330,7 @@ impl WorkSet {
         if x0 >= x1 || y0 >= y1 {
             return false;
         }
-        let screen = |vs: &[ViewVertex]| vs.iter().map(|v| (v.x, v.y)).collect::<Vec<_>>();
-        let (Some(ca), Some(cb)) = (
-            PolygonCoverage::new(&screen(a), self.fill, self.width, self.height),
-            PolygonCoverage::new(&screen(b), self.fill, self.width, self.height),
-        ) else {
+        let (Some(ca), Some(cb)) = (self.own_coverage(p), self.own_coverage(q)) else {
             return false;
         };
         for y in y0..y1 {
