@@ -26,17 +26,17 @@ mod passes;
 
 use std::time::Instant;
 
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DMat3, DMat4, DVec3, DVec4};
 use serde::Serialize;
 
 use crate::Result;
 use crate::clip::outcode_homogeneous;
 use crate::clip::sutherland_hodgman::{ClipEyeVertex, clip_polygon_homogeneous_masked};
 use crate::cull::backface::BackfaceMode;
-use crate::cull::frustum::{Containment, classify_aabb, classify_sphere, frustum_planes};
-use crate::geom::Plane;
+use crate::cull::frustum::{Containment, classify_clip_points, classify_sphere, frustum_planes};
+use crate::geom::{Plane, Sphere};
 use crate::raster::{DepthPlane, FillRule, PolygonCoverage};
-use crate::scene::{Camera, Projection, Scene, Viewport};
+use crate::scene::{Camera, Object, Projection, Scene, Viewport};
 
 /// Options of [`prepare`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,6 +82,37 @@ pub struct ViewVertex {
     pub eye: DVec3,
 }
 
+/// Object to eye space for one object, relative to the camera
+/// ([`ViewTransform::model_view`]): `rotation (shift + linear p)`, where `shift` is the
+/// object's translation less the camera's position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelView {
+    /// The object transform's linear part.
+    pub linear: DMat3,
+    /// The object transform's translation less the camera's position (world axes).
+    pub shift: DVec3,
+    /// World to eye without the translation.
+    pub rotation: DMat3,
+}
+
+impl ModelView {
+    /// The eye-space position of the object-space point `p`. The vertex pass computes
+    /// eight points at once with the same operations in the same order (per
+    /// coordinate: `shift + (z p.z + (y p.y + x p.x))` with the columns of `linear`,
+    /// then `z q.z + (y q.y + x q.x)` with those of `rotation`), so the same bits.
+    #[inline(always)]
+    #[must_use]
+    pub fn apply(&self, p: DVec3) -> DVec3 {
+        let (l, r) = (&self.linear, &self.rotation);
+        let q = DVec3::from_array(std::array::from_fn(|k| {
+            self.shift[k] + (l.z_axis[k] * p.z + (l.y_axis[k] * p.y + l.x_axis[k] * p.x))
+        }));
+        DVec3::from_array(std::array::from_fn(|k| {
+            r.z_axis[k] * q.z + (r.y_axis[k] * q.y + r.x_axis[k] * q.x)
+        }))
+    }
+}
+
 impl ViewVertex {
     /// Eye-space depth (distance along the view axis).
     #[must_use]
@@ -91,10 +122,23 @@ impl ViewVertex {
 }
 
 /// The matrices and constants that map eye space to the screen.
+///
+/// World points reach eye space relative to the camera: first `p - eye` (in world
+/// axes), then [`Self::rotation`]. Far from the origin that difference is exact or
+/// nearly so for points near the camera, where the single matrix [`Self::view`]
+/// (`rotation p - rotation eye`) would cancel two large products: at an offset of
+/// 2^43 its rounding moved a unit triangle seen from 5 units by 1/7 pixel, and the
+/// frustum's far plane taken from [`Self::view_projection`] at 4e22 was off by 1e14.
+/// [`Self::world_to_eye`], [`Self::model_view`] and [`Self::object_containment`] work
+/// this way; the pipeline, BSP and object culling use them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ViewTransform {
-    /// World to eye.
+    /// World to eye in one matrix (see the type's doc for the precise path).
     pub view: DMat4,
+    /// The camera's position in world space.
+    pub eye: DVec3,
+    /// World to eye without the translation: the camera's basis as rows.
+    pub rotation: DMat3,
     /// Eye to clip.
     pub projection: DMat4,
     /// World to clip.
@@ -119,6 +163,8 @@ impl ViewTransform {
         let projection = camera.projection_matrix(viewport.aspect());
         ViewTransform {
             view,
+            eye: camera.eye,
+            rotation: DMat3::from_mat4(view),
             projection,
             view_projection: projection * view,
             width: f64::from(viewport.width),
@@ -134,6 +180,58 @@ impl ViewTransform {
     #[must_use]
     pub fn eye_to_clip(&self, eye: DVec3) -> DVec4 {
         self.projection * eye.extend(1.0)
+    }
+
+    /// Object to eye space for an object placed by `model` (an affine map), relative
+    /// to the camera (see the type's doc).
+    #[must_use]
+    pub fn model_view(&self, model: &DMat4) -> ModelView {
+        ModelView {
+            linear: DMat3::from_mat4(*model),
+            shift: model.w_axis.truncate() - self.eye,
+            rotation: self.rotation,
+        }
+    }
+
+    /// A world point in eye space, relative to the camera (see the type's doc).
+    #[inline]
+    #[must_use]
+    pub fn world_to_eye(&self, p: DVec3) -> DVec3 {
+        self.rotation * (p - self.eye)
+    }
+
+    /// A world point in clip space: [`Self::world_to_eye`], then the projection.
+    #[inline]
+    #[must_use]
+    pub fn world_to_clip(&self, p: DVec3) -> DVec4 {
+        self.eye_to_clip(self.world_to_eye(p))
+    }
+
+    /// The six planes of the view volume in eye space (see [`frustum_planes`]), for
+    /// [`Self::object_containment`].
+    #[must_use]
+    pub fn eye_frustum_planes(&self) -> [DVec4; 6] {
+        frustum_planes(&self.projection)
+    }
+
+    /// Where an object lies relative to the view volume: outside by its bounding
+    /// sphere, else by the clip-space outcodes of its box's corners (the pipeline's
+    /// object culling). `planes` are [`Self::eye_frustum_planes`]; both volumes are
+    /// taken to eye space relative to the camera, so the test stays conservative
+    /// however far the scene is from the origin.
+    #[must_use]
+    pub fn object_containment(&self, planes: &[DVec4; 6], o: &Object) -> Containment {
+        let sphere = Sphere {
+            center: self.world_to_eye(o.sphere.center),
+            radius: o.sphere.radius,
+        };
+        if classify_sphere(planes, &sphere) == Containment::Outside {
+            return Containment::Outside;
+        }
+        if o.bounds.is_empty() {
+            return Containment::Outside;
+        }
+        classify_clip_points(o.bounds.corners().map(|c| self.world_to_clip(c)))
     }
 
     /// The depth key of an eye-space depth.
@@ -677,7 +775,8 @@ pub fn fitted_orthographic_planes(scene: &Scene, camera: &Camera) -> Option<Came
     if !matches!(camera.projection, Projection::Orthographic { .. }) {
         return None;
     }
-    let view = camera.view_matrix();
+    // Depths relative to the camera (see `ViewTransform`).
+    let (_, _, forward) = camera.basis();
     let (mut lo, mut hi, mut size) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
     for o in scene.objects() {
         if o.bounds.is_empty() || o.mesh.polygon_count() == 0 {
@@ -685,7 +784,7 @@ pub fn fitted_orthographic_planes(scene: &Scene, camera: &Camera) -> Option<Came
         }
         size = size.max(o.bounds.extent().max_element());
         for c in o.bounds.corners() {
-            let depth = -view.transform_point3(c).z;
+            let depth = forward.dot(c - camera.eye);
             lo = lo.min(depth);
             hi = hi.max(depth);
         }
@@ -719,7 +818,7 @@ fn visible_objects(
     stats: &mut PipelineStats,
 ) -> Vec<(usize, bool)> {
     let start = Instant::now();
-    let planes = frustum_planes(&t.view_projection);
+    let planes = t.eye_frustum_planes();
     let mut visible: Vec<(usize, bool)> = Vec::with_capacity(scene.objects().len());
     for (k, o) in scene.objects().iter().enumerate() {
         if o.mesh.polygon_count() == 0 {
@@ -729,11 +828,7 @@ fn visible_objects(
             visible.push((k, false));
             continue;
         }
-        let c = match classify_sphere(&planes, &o.sphere) {
-            Containment::Outside => Containment::Outside,
-            _ => classify_aabb(&t.view_projection, &o.bounds),
-        };
-        match c {
+        match t.object_containment(&planes, o) {
             Containment::Outside => {}
             Containment::Inside => visible.push((k, true)),
             Containment::Intersecting => visible.push((k, false)),
@@ -780,9 +875,9 @@ mod reference {
         for &(k, _) in &visible {
             let o = &scene.objects()[k];
             bases.push(vertices.len() as u32);
-            let model_view = t.view * o.transform;
+            let model_view = t.model_view(&o.transform);
             for &p in o.mesh.positions() {
-                let eye = model_view.transform_point3(p);
+                let eye = model_view.apply(p);
                 let c = t.eye_to_clip(eye);
                 let code = outcode_homogeneous(c);
                 let v = if code == 0 {

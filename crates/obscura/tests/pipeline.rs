@@ -785,3 +785,123 @@ fn camera_messages_say_what_is_wrong() {
     });
     assert!(far.contains("1e300") && far.len() < 200, "{far}");
 }
+
+/// A scene of one triangle with the given vertices.
+fn one_triangle(points: [DVec3; 3]) -> Scene {
+    let mut b = obscura::scene::MeshBuilder::new();
+    for p in points {
+        b.push_position(p);
+    }
+    b.push_face(&[0, 1, 2], None).unwrap();
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("tri", b.finish().0).with_closed(false))
+        .unwrap();
+    s
+}
+
+/// Far from the origin, points reach eye space relative to the camera, so a scene and
+/// camera moved together by an offset that keeps every coordinate exact (a power of two
+/// here) give the same image and depths as at the origin. Through the single view
+/// matrix (`R p - R eye`, two products of 1e13 cancelling) a unit triangle seen from 5
+/// units moved by up to 1/7 pixel at 2^43: 7 of 256x256 pixels changed, and the ray
+/// casters, which work relative to the eye, disagreed with the z-buffer there.
+#[test]
+fn a_scene_moved_far_from_the_origin_gives_the_same_image() {
+    let points = [
+        DVec3::new(-1.0, -1.0, 0.0),
+        DVec3::new(1.0, -0.75, 0.25),
+        DVec3::new(0.125, 1.0, -0.5),
+    ];
+    let vp = Viewport::new(256, 256).unwrap();
+    let image = |e: i32| {
+        let off = DVec3::new(2f64.powi(e), 0.0, 2f64.powi(e));
+        let scene = one_triangle(points.map(|p| p + off));
+        let cam = Camera::perspective(
+            DVec3::new(0.5, 0.25, 5.0) + off,
+            off,
+            DVec3::Y,
+            40.0,
+            1.0,
+            10.0,
+        );
+        let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+        let ro = RenderOptions::default();
+        let zb = render(Algorithm::ZBuffer, &view, &ro).unwrap().0;
+        let rc = render(Algorithm::Raycast, &view, &ro).unwrap().0;
+        assert_eq!(rc.differences(&zb), vec![], "offset 2^{e}: ray casting");
+        zb
+    };
+    let home = image(0);
+    assert!(home.covered_pixels() > 8000, "{}", home.covered_pixels());
+    for e in [30, 40, 43, 46] {
+        let far = image(e);
+        assert_eq!(far.differences(&home), vec![], "offset 2^{e}");
+        let worst = far
+            .depth
+            .iter()
+            .zip(&home.depth)
+            .filter(|(a, _)| a.is_finite())
+            .map(|(a, b)| (a - b).abs() / b)
+            .fold(0.0f32, f32::max);
+        assert!(worst < 1e-6, "offset 2^{e}: depths differ by {worst:e}");
+    }
+}
+
+/// Object frustum culling far from the origin (differential-fuzz finding 11): a
+/// triangle 1e11 across at 4e22, the camera 1e11 from it, far / near 1.3e8. The far
+/// plane taken from the view-projection matrix's rows was off by 1e14 there, and the
+/// object, which covers a pixel, was culled by its bounding sphere. Culling now tests
+/// the volumes in eye space, relative to the camera.
+#[test]
+fn object_culling_far_from_the_origin_keeps_what_is_seen() {
+    let scene = one_triangle([
+        DVec3::new(
+            -7.039483384069957e21,
+            -5.175982482524232e21,
+            -4.087648410817198e22,
+        ),
+        DVec3::new(
+            -7.039483384004883e21,
+            -5.175982482527743e21,
+            -4.087648410829896e22,
+        ),
+        DVec3::new(
+            -7.039483384015108e21,
+            -5.175982482447298e21,
+            -4.087648410818173e22,
+        ),
+    ]);
+    let cam = Camera::perspective(
+        DVec3::new(
+            -7.039483383957134e21,
+            -5.175982482597245e21,
+            -4.087648410816534e22,
+        ),
+        DVec3::new(
+            -7.039483383955459e21,
+            -5.175982482593433e21,
+            -4.087648410816394e22,
+        ),
+        DVec3::Y,
+        144.64786508535303,
+        31963.81071426129,
+        4301384660725.959,
+    );
+    let vp = Viewport::new(3, 3).unwrap();
+    let on = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+    let mut no_cull = PrepareOptions::default();
+    no_cull.frustum_cull_objects = false;
+    let off = prepare(&scene, &cam, vp, &no_cull).unwrap();
+    let ro = RenderOptions::default();
+    let seen = render(Algorithm::ZBuffer, &off, &ro).unwrap().0;
+    assert_eq!(seen.covered_pixels(), 1, "the triangle covers one pixel");
+    assert_eq!(on.polygon_count(), 1);
+    assert_eq!(
+        render(Algorithm::ZBuffer, &on, &ro).unwrap().0.ids,
+        seen.ids
+    );
+    for algo in [Algorithm::Bsp, Algorithm::Raycast] {
+        let f = render(algo, &on, &ro).unwrap().0;
+        assert_eq!(f.differences(&seen), vec![], "{algo}");
+    }
+}

@@ -26,6 +26,12 @@ pub enum Containment {
 /// The six planes `(a, b, c, d)` (inside where `a x + b y + c z + d >= 0`, normal of unit
 /// length) of the view volume of `view_projection`, in world space:
 /// left, right, bottom, top, near, far.
+///
+/// Given a projection matrix alone, the planes are those of eye space. Far from the
+/// origin, test eye-space volumes against those (as
+/// [`crate::view::ViewTransform::object_containment`] does): planes taken from a
+/// view-projection matrix there carry the rounding of large translations, which their
+/// normalization magnifies when `far / near` is large.
 #[must_use]
 pub fn frustum_planes(view_projection: &DMat4) -> [DVec4; 6] {
     let r = |i: usize| view_projection.row(i);
@@ -67,9 +73,16 @@ pub fn classify_aabb(view_projection: &DMat4, aabb: &Aabb) -> Containment {
     if aabb.is_empty() {
         return Containment::Outside;
     }
+    classify_clip_points(aabb.corners().map(|c| *view_projection * c.extend(1.0)))
+}
+
+/// Classifies the convex hull of clip-space points (a box's corners, say) by their
+/// outcodes: all sharing an outside bit means outside, all zero inside.
+#[must_use]
+pub fn classify_clip_points(points: impl IntoIterator<Item = DVec4>) -> Containment {
     let (mut and, mut or) = (0x3f, 0);
-    for c in aabb.corners() {
-        let code = outcode_homogeneous(*view_projection * c.extend(1.0));
+    for c in points {
+        let code = outcode_homogeneous(c);
         and &= code;
         or |= code;
     }

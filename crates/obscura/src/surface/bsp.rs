@@ -42,15 +42,15 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use glam::{DMat4, DVec3};
+use glam::DVec3;
 
 use crate::accel::bsp::{BspTraversal, BspTree, BspVisitor, Viewpoint};
 use crate::clip::outcode_homogeneous;
-use crate::cull::frustum::{Containment, classify_aabb, classify_sphere, frustum_planes};
+use crate::cull::frustum::Containment;
 use crate::geom::newell_normal;
 use crate::surface::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
 use crate::surface::{RenderOptions, Stats};
-use crate::view::{PreparedView, ViewTransform, ViewVertex};
+use crate::view::{ModelView, PreparedView, ViewTransform, ViewVertex};
 use crate::{Error, Frame, Result};
 
 /// Renders a prepared view with a BSP tree built for it from `options.bsp`.
@@ -87,7 +87,7 @@ fn view_data(tree: &BspTree, view: &PreparedView<'_>) -> ViewData {
     let scene = view.scene();
     let t = view.transform();
     let options = view.options();
-    let planes = frustum_planes(&t.view_projection);
+    let planes = t.eye_frustum_planes();
     let visible: Vec<bool> = scene
         .objects()
         .iter()
@@ -95,36 +95,29 @@ fn view_data(tree: &BspTree, view: &PreparedView<'_>) -> ViewData {
             if o.mesh.polygon_count() == 0 {
                 return false;
             }
-            if !options.frustum_cull_objects {
-                return true;
-            }
-            let c = match classify_sphere(&planes, &o.sphere) {
-                Containment::Outside => Containment::Outside,
-                _ => classify_aabb(&t.view_projection, &o.bounds),
-            };
-            c != Containment::Outside
+            !options.frustum_cull_objects
+                || t.object_containment(&planes, o) != Containment::Outside
         })
         .collect();
-    let model_view: Vec<DMat4> = scene
+    let model_view: Vec<ModelView> = scene
         .objects()
         .iter()
-        .map(|o| t.view * o.transform)
+        .map(|o| t.model_view(&o.transform))
         .collect();
-    let eye: Vec<DVec3> =
-        tree.vertices()
-            .iter()
-            .map(|v| {
-                let k = v.object as usize;
-                if !visible[k] {
-                    return DVec3::NAN;
-                }
-                match v.mesh_vertex() {
-                    Some(i) => model_view[k]
-                        .transform_point3(scene.objects()[k].mesh.positions()[i as usize]),
-                    None => t.view.transform_point3(v.world),
-                }
-            })
-            .collect();
+    let eye: Vec<DVec3> = tree
+        .vertices()
+        .iter()
+        .map(|v| {
+            let k = v.object as usize;
+            if !visible[k] {
+                return DVec3::NAN;
+            }
+            match v.mesh_vertex() {
+                Some(i) => model_view[k].apply(scene.objects()[k].mesh.positions()[i as usize]),
+                None => t.world_to_eye(v.world),
+            }
+        })
+        .collect();
     let mut polygon_base = Vec::with_capacity(scene.objects().len());
     let mut back_facing = Vec::new();
     let mut pts = Vec::new();
@@ -245,7 +238,7 @@ impl BspVisitor for Visitor<'_> {
             f64::NEG_INFINITY,
         );
         for c in b.corners() {
-            let clip = self.t.view_projection * c.extend(1.0);
+            let clip = self.t.world_to_clip(c);
             // A corner behind the eye plane: its projection bounds nothing.
             if !(clip.w > 0.0) {
                 return true;
@@ -361,7 +354,7 @@ pub fn render_with_tree(
         painter: &mut painter,
         cull_subtrees: traversal == BspTraversal::FrontToBack,
         counts: Counts::default(),
-        rays: PixelRays::new(view, DMat4::from_translation(-tree.origin())),
+        rays: PixelRays::new(view, |p| p - tree.origin(), |d| d),
         eye_pts: Vec::new(),
         clip_pts: Vec::new(),
         screen: Vec::new(),

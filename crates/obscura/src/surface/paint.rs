@@ -33,7 +33,7 @@
 //!
 //! Cost: O(rows + pixels) per polygon.
 
-use glam::{DMat4, DVec3};
+use glam::DVec3;
 
 use crate::accel::triangles::PrimaryRays;
 use crate::frame::BACKGROUND;
@@ -123,16 +123,20 @@ pub(crate) struct PixelRays {
 }
 
 impl PixelRays {
-    /// The view's rays (world space, [`PrimaryRays`]) carried into the frame of
-    /// `to_frame` (an affine map of world space).
-    pub fn new(view: &PreparedView<'_>, to_frame: DMat4) -> Self {
+    /// The view's rays (world space, [`PrimaryRays`]) carried into another frame by
+    /// an affine map of world space: `point` maps points, `vector` its linear part.
+    pub fn new(
+        view: &PreparedView<'_>,
+        point: impl Fn(DVec3) -> DVec3,
+        vector: impl Fn(DVec3) -> DVec3,
+    ) -> Self {
         let rays = PrimaryRays::new(view.camera(), view.viewport());
         let (o0, r0) = rays.ray(0.0, 0.0);
         let (o1, r1) = rays.ray(1.0, 0.0);
         let (o2, r2) = rays.ray(0.0, 1.0);
-        let v = |d: DVec3| to_frame.transform_vector3(d);
+        let v = vector;
         PixelRays {
-            o: [to_frame.transform_point3(o0), v(o1 - o0), v(o2 - o0)],
+            o: [point(o0), v(o1 - o0), v(o2 - o0)],
             r: [v(r0), v(r1 - r0), v(r2 - r0)],
         }
     }

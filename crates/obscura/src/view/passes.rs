@@ -14,9 +14,9 @@
 //! (`transform_vertices8`), so that they stay in vector lanes: 3.44-3.55 -> 2.99-3.10
 //! ms (5 rounds of 40 alternated).
 
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DVec3, DVec4};
 
-use super::{ViewTransform, ViewVertex};
+use super::{ModelView, ViewTransform, ViewVertex};
 use crate::clip::outcode_homogeneous;
 use crate::clip::sutherland_hodgman::{ClipEyeVertex, clip_polygon_homogeneous_masked};
 use crate::cull::backface::BackfaceMode;
@@ -56,8 +56,8 @@ fn clip_headroom(total: usize) -> usize {
 /// One vertex: eye position, clip position, outcode, and the screen position when
 /// inside the view volume (NaN otherwise).
 #[inline(always)]
-fn transform_vertex(model_view: &DMat4, t: &ViewTransform, p: DVec3) -> (ViewVertex, u8) {
-    let eye = model_view.transform_point3(p);
+fn transform_vertex(model_view: &ModelView, t: &ViewTransform, p: DVec3) -> (ViewVertex, u8) {
+    let eye = model_view.apply(p);
     let c = t.eye_to_clip(eye);
     let code = outcode_homogeneous(c);
     let v = if code == 0 {
@@ -79,18 +79,24 @@ fn transform_vertex(model_view: &DMat4, t: &ViewTransform, p: DVec3) -> (ViewVer
 /// compiler keeps the eight points in vector lanes.
 #[inline(always)]
 fn transform_vertices8(
-    mv: &DMat4,
+    mv: &ModelView,
     t: &ViewTransform,
     p: &[DVec3; 8],
 ) -> ([ViewVertex; 8], [u8; 8]) {
     let px: [f64; 8] = std::array::from_fn(|l| p[l].x);
     let py: [f64; 8] = std::array::from_fn(|l| p[l].y);
     let pz: [f64; 8] = std::array::from_fn(|l| p[l].z);
-    // `DMat4::transform_point3`: x_axis px, then y_axis py + that, z_axis pz + that,
-    // w_axis + that.
+    // `ModelView::apply`: per coordinate, shift + (z pz + (y py + x px)) with the
+    // columns of `linear`, then z qz + (y qy + x qx) with those of `rotation`.
+    let (lin, r) = (&mv.linear, &mv.rotation);
+    let shifted = |k: usize| -> [f64; 8] {
+        let (ax, ay, az, aw) = (lin.x_axis[k], lin.y_axis[k], lin.z_axis[k], mv.shift[k]);
+        std::array::from_fn(|j| aw + (az * pz[j] + (ay * py[j] + ax * px[j])))
+    };
+    let (qx, qy, qz) = (shifted(0), shifted(1), shifted(2));
     let point = |k: usize| -> [f64; 8] {
-        let (ax, ay, az, aw) = (mv.x_axis[k], mv.y_axis[k], mv.z_axis[k], mv.w_axis[k]);
-        std::array::from_fn(|l| aw + (az * pz[l] + (ay * py[l] + ax * px[l])))
+        let (ax, ay, az) = (r.x_axis[k], r.y_axis[k], r.z_axis[k]);
+        std::array::from_fn(|j| az * qz[j] + (ay * qy[j] + ax * qx[j]))
     };
     let (ex, ey, ez) = (point(0), point(1), point(2));
     // `DMat4::mul_vec4` of (eye, 1): x_axis ex, plus y_axis ey, plus z_axis ez, plus
@@ -136,9 +142,9 @@ pub(super) fn transform_vertices(
     threads: usize,
 ) -> (Vec<ViewVertex>, Vec<u8>) {
     let total = bases.last().map_or(0, |&b| b as usize);
-    let model_views: Vec<DMat4> = visible
+    let model_views: Vec<ModelView> = visible
         .iter()
-        .map(|&(k, _)| t.view * scene.objects()[k].transform)
+        .map(|&(k, _)| t.model_view(&scene.objects()[k].transform))
         .collect();
     // Room for the vertices clipping makes, appended after these by `prepare`: growing
     // the vector would copy it all into fresh pages (Sponza's atrium view: 8.8 MB,
@@ -197,7 +203,7 @@ pub(super) fn transform_vertices(
 fn transform_serial(
     scene: &Scene,
     visible: &[(usize, bool)],
-    model_views: &[DMat4],
+    model_views: &[ModelView],
     t: &ViewTransform,
     vertices: &mut Vec<ViewVertex>,
     codes: &mut Vec<u8>,
@@ -227,7 +233,7 @@ fn transform_serial(
 fn transform_serial_avx2(
     scene: &Scene,
     visible: &[(usize, bool)],
-    model_views: &[DMat4],
+    model_views: &[ModelView],
     t: &ViewTransform,
     vertices: &mut Vec<ViewVertex>,
     codes: &mut Vec<u8>,
@@ -242,7 +248,7 @@ fn transform_serial_avx2(
 fn transform_serial_avx512(
     scene: &Scene,
     visible: &[(usize, bool)],
-    model_views: &[DMat4],
+    model_views: &[ModelView],
     t: &ViewTransform,
     vertices: &mut Vec<ViewVertex>,
     codes: &mut Vec<u8>,
@@ -509,9 +515,9 @@ mod tests {
         );
         let t = ViewTransform::new(&cam, Viewport::new(160, 90).unwrap());
         let visible: Vec<(usize, bool)> = (0..scene.objects().len()).map(|k| (k, true)).collect();
-        let model_views: Vec<DMat4> = visible
+        let model_views: Vec<ModelView> = visible
             .iter()
-            .map(|&(k, _)| t.view * scene.objects()[k].transform)
+            .map(|&(k, _)| t.model_view(&scene.objects()[k].transform))
             .collect();
         // The reference: one vertex at a time.
         let (mut v0, mut c0) = (Vec::new(), Vec::new());
@@ -551,7 +557,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,avx512f,avx512vl,avx512dq")]
     fn vertices8_avx512(
-        mv: &DMat4,
+        mv: &ModelView,
         t: &ViewTransform,
         p: &[DVec3; 8],
     ) -> ([ViewVertex; 8], [u8; 8]) {
@@ -577,12 +583,12 @@ mod tests {
             Camera::perspective(eye, DVec3::ZERO, DVec3::Y, 60.0, 0.5, 20.0),
             Camera::orthographic(eye, DVec3::ZERO, DVec3::Y, 3.0, 0.5, 20.0),
         ];
-        let model =
-            DMat4::from_rotation_y(0.3) * DMat4::from_translation(DVec3::new(0.1, 0.2, -0.3));
+        let model = glam::DMat4::from_rotation_y(0.3)
+            * glam::DMat4::from_translation(DVec3::new(0.1, 0.2, -0.3));
         let mut outside = 0;
         for cam in cameras {
             let t = ViewTransform::new(&cam, Viewport::new(320, 200).unwrap());
-            let mv = t.view * model;
+            let mv = t.model_view(&model);
             for round in 0..400 {
                 let p: [DVec3; 8] = std::array::from_fn(|_| {
                     let mut c = [0.0; 3].map(|_| rng.range(-6.0, 6.0));

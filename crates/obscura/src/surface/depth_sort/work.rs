@@ -147,7 +147,7 @@ impl WorkSet {
             fallback: false,
             scratch: Vec::new(),
             cuts: Vec::new(),
-            rays: PixelRays::new(view, t.view),
+            rays: PixelRays::new(view, |p| t.world_to_eye(p), |d| t.rotation * d),
             coverages: Vec::new(),
         };
         let mut screen = Vec::new();
