@@ -22,7 +22,7 @@
 //! Coverage is [`PolygonCoverage`] (the shared top-left rule), so the painted pixels are
 //! exactly those the z-buffer would consider for the same polygon. The depth written
 //! is the eye-space depth of the polygon's depth-key plane at the pixel centre,
-//! computed as the z-buffer does (key stepped along the span, stored through `f32`).
+//! computed as the z-buffer does (the plane's key at the centre, stored through `f32`).
 //!
 //! A piece of a polygon that the caller cut by planes (BSP's and depth sort's
 //! splits) can be painted as the pixels of the *whole* polygon that lie on its sides of
@@ -332,8 +332,8 @@ impl Painter {
     }
 
     /// [`Painter::paint`] restricted to the pixels of `region` on the side of every
-    /// cut. The keys are stepped along each row of the whole polygon as without a
-    /// restriction, so a pixel gets the same key whichever piece paints it.
+    /// cut. A pixel's key is the whole polygon's plane at its centre, so it is the
+    /// same whichever piece paints it.
     fn paint_within(
         &mut self,
         screen: &[(f64, f64)],
@@ -359,11 +359,14 @@ impl Painter {
             let Some((x0, x1)) = coverage.row_span(y) else {
                 continue;
             };
-            // The pixels of the span the restriction keeps.
-            let keep =
-                |x: u32| region.x0 <= x && x < region.x1 && cuts.iter().all(|c| c.keeps(x, y));
+            // The pixels of the span within the region; of those, the cuts keep some.
+            let (x0, x1) = (x0.max(region.x0), x1.min(region.x1));
+            let keep = |x: u32| cuts.iter().all(|c| c.keeps(x, y));
             let row = y as usize * width;
-            let mut z = plane.at(f64::from(x0) + 0.5, f64::from(y) + 0.5);
+            let sy = f64::from(y) + 0.5;
+            // The key of the plane at the pixel's centre (not stepped from the span's
+            // start), the same whichever piece paints the pixel.
+            let key = |x: u32| plane.at(f64::from(x) + 0.5, sy) as f32;
             let mut row_written = 0u32;
             if once {
                 let block_row = (y / BLOCK) as usize * self.blocks_x;
@@ -373,17 +376,16 @@ impl Painter {
                     any |= kept;
                     if kept && self.frame.ids[k] == BACKGROUND {
                         self.frame.ids[k] = face;
-                        self.frame.depth[k] = self.transform.depth_of_key(z as f32);
+                        self.frame.depth[k] = self.transform.depth_of_key(key(x));
                         self.block_uncovered[block_row + (x / BLOCK) as usize] -= 1;
                         row_written += 1;
                     }
-                    z += plane.dzdx;
                 }
                 self.uncovered -= u64::from(row_written);
             } else if self.mode == PaintMode::DepthTest {
                 for x in x0..x1 {
                     let k = row + x as usize;
-                    let zf = z as f32;
+                    let zf = key(x);
                     let old = self.keys[k];
                     let kept = keep(x);
                     any |= kept;
@@ -393,7 +395,6 @@ impl Painter {
                         self.frame.depth[k] = self.transform.depth_of_key(zf);
                         row_written += 1;
                     }
-                    z += plane.dzdx;
                 }
             } else {
                 for x in x0..x1 {
@@ -401,12 +402,12 @@ impl Painter {
                     any |= kept;
                     if kept {
                         let k = row + x as usize;
-                        self.keys[k] = z as f32;
+                        let zf = key(x);
+                        self.keys[k] = zf;
                         self.frame.ids[k] = face;
-                        self.frame.depth[k] = self.transform.depth_of_key(z as f32);
+                        self.frame.depth[k] = self.transform.depth_of_key(zf);
                         row_written += 1;
                     }
-                    z += plane.dzdx;
                 }
             }
             written += u64::from(row_written);
