@@ -1018,3 +1018,65 @@ fn an_eye_inside_a_solid_sees_its_boundary_from_inside() {
     }
     assert!(o.ids.iter().filter(|&&i| i == 4).count() > 600);
 }
+
+#[test]
+fn an_eye_within_a_voxel_of_a_surface_sees_past_it() {
+    // A ground square 20 wide and a box on it; the eye 0.05 above the ground, where
+    // the voxels (depth 5) are about 0.64 on a side, so the eye's voxel holds ground.
+    // Taking that voxel as the first hit made the whole image ground at depth `near`;
+    // it is now decided by the ground itself: rays that meet it inside the voxel show
+    // it there, the others go on. Rays that leave the voxel upwards reach the sky;
+    // those that stay in the layer of ground voxels meet the next one (the documented
+    // growth of a surface by its voxels, seen from within the layer).
+    let mut scene = Scene::new();
+    let mut b = obscura::scene::MeshBuilder::new();
+    for (x, z) in [(-10.0, -10.0), (-10.0, 10.0), (10.0, 10.0), (10.0, -10.0)] {
+        b.push_position(DVec3::new(x, 0.0, z));
+    }
+    b.push_face(&[0, 1, 2, 3], None).unwrap();
+    scene
+        .add(ObjectDesc::new("ground", b.finish().0).with_closed(false))
+        .unwrap();
+    scene
+        .add(ObjectDesc::new(
+            "box",
+            demo::box_mesh(DVec3::new(4.0, 0.0, -1.0), DVec3::new(5.0, 1.5, 1.0)),
+        ))
+        .unwrap();
+    let camera = Camera::perspective(
+        DVec3::new(0.0, 0.05, 0.0),
+        DVec3::new(5.0, 0.05, 0.0),
+        DVec3::Y,
+        60.0,
+        0.01,
+        100.0,
+    );
+    let vp = Viewport::new(64, 48).unwrap();
+    let (z, o) = render_both(&scene, &camera, vp, 5);
+    let sky = z.ids.iter().filter(|&&i| i == BACKGROUND).count();
+    assert!(sky > 64 * 16, "{sky}");
+    let agree = |pick: &dyn Fn(u32) -> bool| {
+        let (mut n, mut same) = (0, 0);
+        for (&a, &b) in z.ids.iter().zip(&o.ids) {
+            if pick(a) {
+                n += 1;
+                same += usize::from(a == b);
+            }
+        }
+        same as f64 / n as f64
+    };
+    // Where the ground is seen, its depth is the exact hit or a voxel's entry beyond
+    // the eye's, never `near`.
+    assert!(
+        agree(&|i| i == BACKGROUND) > 0.5,
+        "sky {}",
+        agree(&|i| i == BACKGROUND)
+    );
+    // The top rows look up out of the eye's voxel, above the box's voxels.
+    assert!(o.ids[..64 * 2].iter().all(|&i| i == BACKGROUND));
+    for (k, (&id, &d)) in o.ids.iter().zip(&o.depth).enumerate() {
+        if id == 0 && z.ids[k] == 0 {
+            assert!(d > 0.05, "pixel {k}: ground at depth {d}");
+        }
+    }
+}

@@ -53,6 +53,11 @@ pub struct RayHit {
     pub face: u32,
     /// The ray parameter where the ray enters it (at least `t_min`).
     pub t: f64,
+    /// Where the ray enters and leaves the voxel (`enter` below `t_min` when the ray
+    /// starts inside it).
+    pub enter: f64,
+    /// Where the ray leaves the voxel.
+    pub exit: f64,
 }
 
 struct Walk {
@@ -111,6 +116,8 @@ impl Octree {
                 node: i,
                 face: n.face,
                 t: enter.max(walk.t_min),
+                enter,
+                exit,
             }),
             NodeKind::Internal => {
                 let tm = (t0 + t1) * 0.5;
