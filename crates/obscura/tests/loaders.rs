@@ -1489,6 +1489,49 @@ fn toml_primitives_match_their_generators() {
     assert_eq!(s.camera(), None);
 }
 
+/// A primitive's closed and convex flags are set by construction (no edge adjacency is
+/// built for them: a grid of 20 million quads spent 43 % of its loading there), so
+/// they must be what the adjacency finds, for every shape and small tessellations.
+#[test]
+fn toml_primitive_flags_are_what_the_adjacency_finds() {
+    use obscura::scene::{EdgeAdjacency, is_convex_closed};
+    let dir = TempDir::new("toml-prim-flags");
+    let tables = [
+        "primitive = \"box\"",
+        "primitive = \"box\"\nsize = [3, 0.5, 2]",
+        "primitive = \"sphere\"\nsegments = 3\nrings = 2",
+        "primitive = \"sphere\"\nsegments = 8\nrings = 4",
+        "primitive = \"sphere\"\nsegments = 31\nrings = 17",
+        "primitive = \"torus\"\nsegments = 3\nsides = 3",
+        "primitive = \"torus\"\nsegments = 12\nsides = 7",
+        "primitive = \"cone\"\nsegments = 3",
+        "primitive = \"cone\"\nsegments = 40\nheight = 0.1",
+        "primitive = \"grid\"",
+        "primitive = \"grid\"\nnx = 3\nnz = 2",
+    ];
+    let text: String = tables
+        .iter()
+        .map(|t| format!("[[object]]\n{t}\n"))
+        .collect();
+    let s = load(&dir.write("p.toml", &text));
+    assert_eq!(s.objects().len(), tables.len());
+    for (o, t) in s.objects().iter().zip(tables) {
+        let adj = EdgeAdjacency::new(&o.mesh);
+        let closed = adj.is_closed();
+        let convex = closed && is_convex_closed(&o.mesh, &adj, 1e-9);
+        assert_eq!((o.closed, o.convex), (closed, convex), "{t}");
+    }
+    // Given flags still win.
+    let s = load(&dir.write(
+        "q.toml",
+        "[[object]]\nprimitive = \"sphere\"\nclosed = false\n",
+    ));
+    assert_eq!(
+        (s.objects()[0].closed, s.objects()[0].convex),
+        (false, false)
+    );
+}
+
 #[test]
 fn toml_orthographic_camera_with_fitted_range() {
     let dir = TempDir::new("toml-ortho");
