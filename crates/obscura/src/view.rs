@@ -149,6 +149,11 @@ pub struct ViewTransform {
     pub height: f64,
     /// Near plane distance.
     pub near: f64,
+    /// [`Camera::near_limit`]: the smallest depth kept.
+    pub near_limit: f64,
+    /// `z + w` of clip space per unit of depth beyond the near plane: `2 far / (far -
+    /// near)` (perspective) or `2 / (far - near)` (orthographic).
+    pub near_scale: f64,
     /// Far plane distance.
     pub far: f64,
     /// Parallel projection.
@@ -170,16 +175,34 @@ impl ViewTransform {
             width: f64::from(viewport.width),
             height: f64::from(viewport.height),
             near: camera.near,
+            near_limit: camera.near_limit(),
+            near_scale: match camera.projection {
+                Projection::Perspective { .. } => 2.0 * camera.far / (camera.far - camera.near),
+                Projection::Orthographic { .. } => 2.0 / (camera.far - camera.near),
+            },
             far: camera.far,
             orthographic: matches!(camera.projection, Projection::Orthographic { .. }),
         }
     }
 
-    /// Eye to clip space.
+    /// Eye to clip space. `x`, `y` and `w` are the projection's; `z` is `-w` plus
+    /// [`Self::near_scale`] times the depth beyond [`Self::near_limit`], which equals
+    /// the projection's `z` up to rounding and the allowance, so that the near plane
+    /// test `z >= -w` decides by the depth itself: rounding of the projection's `z`
+    /// kept or dropped a polygon lying on the near plane at random (see
+    /// [`Camera::near_limit`]).
     #[inline]
     #[must_use]
     pub fn eye_to_clip(&self, eye: DVec3) -> DVec4 {
-        self.projection * eye.extend(1.0)
+        let c = self.projection * eye.extend(1.0);
+        DVec4::new(c.x, c.y, self.near_z(c.w, -eye.z), c.w)
+    }
+
+    /// The clip `z` of a point of depth `depth` and clip `w` (see [`Self::eye_to_clip`]).
+    #[inline(always)]
+    #[must_use]
+    pub fn near_z(&self, w: f64, depth: f64) -> f64 {
+        -w + self.near_scale * (depth - self.near_limit)
     }
 
     /// Object to eye space for an object placed by `model` (an affine map), relative

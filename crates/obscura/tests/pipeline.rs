@@ -905,3 +905,64 @@ fn object_culling_far_from_the_origin_keeps_what_is_seen() {
         assert_eq!(f.differences(&seen), vec![], "{algo}");
     }
 }
+
+/// A quad lying exactly on the near plane, seen head-on from the origin, for several
+/// `near` and both projections: every exact algorithm draws all of it, as it draws the
+/// same quad a little beyond the plane. The pipeline decided such a quad by the
+/// rounding of its clip coordinates (dropped whole for `near` 0.5 and 1/3 in
+/// perspective, 0.1 in parallel projection) and the ray casters by the rounding of
+/// each pixel's `t` (they kept 1,070 to 1,676 of its pixels).
+#[test]
+fn a_polygon_on_the_near_plane_is_drawn_by_every_algorithm() {
+    let corners = [(-0.37, -0.29), (0.41, -0.33), (0.39, 0.31), (-0.35, 0.27)];
+    let vp = Viewport::new(64, 64).unwrap();
+    for ortho in [false, true] {
+        for near in [0.5, 0.1, 0.3, 1.0 / 3.0, 0.7, 1e-3, 10.0, 2.2] {
+            let frame = |depth: f64| {
+                // In perspective the quad grows with its depth, so that it covers the
+                // same pixels at `near` and a little beyond.
+                let s = if ortho { near } else { depth };
+                let scene = one_quad(corners.map(|(x, y)| DVec3::new(x * s, y * s, -depth)));
+                let cam = if ortho {
+                    Camera::orthographic(DVec3::ZERO, -DVec3::Z, DVec3::Y, near, near, 100.0 * near)
+                } else {
+                    Camera::perspective(DVec3::ZERO, -DVec3::Z, DVec3::Y, 60.0, near, 100.0 * near)
+                };
+                let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
+                let ro = RenderOptions::default();
+                let zb = render(Algorithm::ZBuffer, &view, &ro).unwrap().0;
+                for algo in Algorithm::ALL {
+                    if algo.is_exact() {
+                        let f = render(algo, &view, &ro).unwrap().0;
+                        let d = f.differences(&zb);
+                        assert!(
+                            d.is_empty(),
+                            "{algo}, near {near}, ortho {ortho}: {} pixels differ, first {:?}",
+                            d.len(),
+                            d.first()
+                        );
+                    }
+                }
+                zb.covered_pixels()
+            };
+            let (on, beyond) = (frame(near), frame(near * 1.001));
+            assert!(beyond > 1000, "{beyond}");
+            assert!(
+                on.abs_diff(beyond) <= 8,
+                "near {near}, ortho {ortho}: {on} vs {beyond}"
+            );
+        }
+    }
+}
+
+fn one_quad(points: [DVec3; 4]) -> Scene {
+    let mut b = obscura::scene::MeshBuilder::new();
+    for p in points {
+        b.push_position(p);
+    }
+    b.push_face(&[0, 1, 2, 3], None).unwrap();
+    let mut s = Scene::new();
+    s.add(ObjectDesc::new("quad", b.finish().0).with_closed(false))
+        .unwrap();
+    s
+}

@@ -241,7 +241,7 @@ impl PrimaryRays {
             width: f64::from(viewport.width),
             height: f64::from(viewport.height),
             orthographic: matches!(camera.projection, Projection::Orthographic { .. }),
-            near: camera.near,
+            near: camera.near_limit(),
             far: camera.far,
             inclusive: false,
         }

@@ -106,7 +106,9 @@ fn transform_vertices8(
         let (ax, ay, az, aw) = (m.x_axis[k], m.y_axis[k], m.z_axis[k], m.w_axis[k]);
         std::array::from_fn(|l| ax * ex[l] + ay * ey[l] + az * ez[l] + aw * 1.0)
     };
-    let (cx, cy, cz, cw) = (clip(0), clip(1), clip(2), clip(3));
+    let (cx, cy, cw) = (clip(0), clip(1), clip(3));
+    // `ViewTransform::eye_to_clip`'s `z`, from the depth.
+    let cz: [f64; 8] = std::array::from_fn(|l| t.near_z(cw[l], -ez[l]));
     let mut codes = [0u8; 8];
     let mut vertices = [ViewVertex {
         x: 0.0,
