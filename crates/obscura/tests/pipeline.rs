@@ -786,15 +786,16 @@ fn camera_messages_say_what_is_wrong() {
     assert!(far.contains("1e300") && far.len() < 200, "{far}");
 }
 
-/// A scene of one triangle with the given vertices.
-fn one_triangle(points: [DVec3; 3]) -> Scene {
+/// A scene of one open polygon with the given vertices.
+fn one_polygon(points: &[DVec3]) -> Scene {
     let mut b = obscura::scene::MeshBuilder::new();
-    for p in points {
+    for &p in points {
         b.push_position(p);
     }
-    b.push_face(&[0, 1, 2], None).unwrap();
+    let indices: Vec<u32> = (0..points.len() as u32).collect();
+    b.push_face(&indices, None).unwrap();
     let mut s = Scene::new();
-    s.add(ObjectDesc::new("tri", b.finish().0).with_closed(false))
+    s.add(ObjectDesc::new("polygon", b.finish().0).with_closed(false))
         .unwrap();
     s
 }
@@ -815,7 +816,7 @@ fn a_scene_moved_far_from_the_origin_gives_the_same_image() {
     let vp = Viewport::new(256, 256).unwrap();
     let image = |e: i32| {
         let off = DVec3::new(2f64.powi(e), 0.0, 2f64.powi(e));
-        let scene = one_triangle(points.map(|p| p + off));
+        let scene = one_polygon(&points.map(|p| p + off));
         let cam = Camera::perspective(
             DVec3::new(0.5, 0.25, 5.0) + off,
             off,
@@ -854,7 +855,7 @@ fn a_scene_moved_far_from_the_origin_gives_the_same_image() {
 /// the volumes in eye space, relative to the camera.
 #[test]
 fn object_culling_far_from_the_origin_keeps_what_is_seen() {
-    let scene = one_triangle([
+    let scene = one_polygon(&[
         DVec3::new(
             -7.039483384069957e21,
             -5.175982482524232e21,
@@ -922,7 +923,7 @@ fn a_polygon_on_the_near_plane_is_drawn_by_every_algorithm() {
                 // In perspective the quad grows with its depth, so that it covers the
                 // same pixels at `near` and a little beyond.
                 let s = if ortho { near } else { depth };
-                let scene = one_quad(corners.map(|(x, y)| DVec3::new(x * s, y * s, -depth)));
+                let scene = one_polygon(&corners.map(|(x, y)| DVec3::new(x * s, y * s, -depth)));
                 let cam = if ortho {
                     Camera::orthographic(DVec3::ZERO, -DVec3::Z, DVec3::Y, near, near, 100.0 * near)
                 } else {
@@ -953,16 +954,4 @@ fn a_polygon_on_the_near_plane_is_drawn_by_every_algorithm() {
             );
         }
     }
-}
-
-fn one_quad(points: [DVec3; 4]) -> Scene {
-    let mut b = obscura::scene::MeshBuilder::new();
-    for p in points {
-        b.push_position(p);
-    }
-    b.push_face(&[0, 1, 2, 3], None).unwrap();
-    let mut s = Scene::new();
-    s.add(ObjectDesc::new("quad", b.finish().0).with_closed(false))
-        .unwrap();
-    s
 }
