@@ -7,12 +7,18 @@
 //! Each decision is computed by the expressions of the stage-per-pass pipeline it
 //! replaced (kept as `prepare_reference` in the tests, which compare the two).
 //!
-//! On one thread, the vertex pass runs compiled for AVX-512 (else AVX2) when the
-//! processor has it: the same operations (the compiler never fuses a multiply and an
-//! add), 4.10 -> 3.90 ms for the whole preparation of the Sponza atrium view (minimum
-//! of 6x40 runs). It takes the points eight at a time, lane by lane without branches
+//! The vertex pass runs compiled for AVX-512 (else AVX2) when the processor has it:
+//! the same operations (the compiler never fuses a multiply and an add), 4.10 -> 3.90
+//! ms for the whole preparation of the Sponza atrium view (minimum of 6x40 runs). It
+//! takes the points eight at a time, lane by lane without branches
 //! (`transform_vertices8`), so that they stay in vector lanes: 3.44-3.55 -> 2.99-3.10
-//! ms (5 rounds of 40 alternated).
+//! ms (5 rounds of 40 alternated). On several threads each takes contiguous runs
+//! through the same kernel, written in place into the output's capacity; the
+//! parallel pass used to map vertex by vertex through the scalar transform and unzip
+//! the results, and made the preparation slower on two threads than on one (Sponza,
+//! warm, minimum of 20: 3.9-4.1 ms on two threads against 2.8 on one; now 1.9-3.0).
+
+use std::mem::MaybeUninit;
 
 use glam::{DVec3, DVec4};
 
@@ -153,109 +159,150 @@ pub(super) fn transform_vertices(
     // 2,700 page faults, 4 ms). Untouched capacity costs address space only.
     let mut vertices = huge_vec(total + clip_headroom(total));
     let mut codes = huge_vec(total);
+    let pass = VertexPass {
+        scene,
+        visible,
+        bases,
+        model_views: &model_views,
+        t,
+    };
+    let (out_v, out_c) = (
+        &mut vertices.spare_capacity_mut()[..total],
+        &mut codes.spare_capacity_mut()[..total],
+    );
     #[cfg(feature = "parallel")]
     if threads > 1 && total >= PARALLEL_MIN {
         use rayon::prelude::*;
-        let slot_of = |g: usize| bases.partition_point(|&b| b as usize <= g) - 1;
-        (0..total)
-            .into_par_iter()
-            .map_init(
-                || usize::MAX,
-                |slot, g| {
-                    // Each job walks a contiguous range: look the object up once per
-                    // object, not per vertex.
-                    if *slot >= visible.len()
-                        || g < bases[*slot] as usize
-                        || g >= bases[*slot + 1] as usize
-                    {
-                        *slot = slot_of(g);
-                    }
-                    let s = *slot;
-                    let o = &scene.objects()[visible[s].0];
-                    let p = o.mesh.positions()[g - bases[s] as usize];
-                    transform_vertex(&model_views[s], t, p)
-                },
-            )
-            .unzip_into_vecs(&mut vertices, &mut codes);
-        return (vertices, codes);
+        // A few contiguous runs per thread, each through the vector kernel.
+        let run = total.div_ceil(threads * 4).next_multiple_of(8);
+        out_v
+            .par_chunks_mut(run)
+            .zip(out_c.par_chunks_mut(run))
+            .enumerate()
+            .for_each(|(k, (v, c))| pass.run_fastest(k * run, v, c));
+    } else {
+        pass.run_fastest(0, out_v, out_c);
     }
-    let _ = threads;
-    #[cfg(target_arch = "x86_64")]
-    if crate::raster::avx512::Avx512::new().is_some() {
-        // SAFETY: `Avx512::new` checked AVX-512 F, VL, BW and DQ, which imply AVX2.
-        unsafe {
-            transform_serial_avx512(scene, visible, &model_views, t, &mut vertices, &mut codes)
-        };
-        return (vertices, codes);
+    #[cfg(not(feature = "parallel"))]
+    {
+        let _ = threads;
+        pass.run_fastest(0, out_v, out_c);
     }
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: AVX2 was just detected.
-        unsafe {
-            transform_serial_avx2(scene, visible, &model_views, t, &mut vertices, &mut codes)
-        };
-        return (vertices, codes);
+    // SAFETY: the runs above cover `0..total` and `VertexPass::run` writes every
+    // element of the slices it is given (it checks so before returning; a run that
+    // panicked never gets here).
+    unsafe {
+        vertices.set_len(total);
+        codes.set_len(total);
     }
-    transform_serial(scene, visible, &model_views, t, &mut vertices, &mut codes);
     (vertices, codes)
 }
 
-/// The serial vertex pass: the vertices of the visible objects in order.
-#[inline(always)]
-fn transform_serial(
-    scene: &Scene,
-    visible: &[(usize, bool)],
-    model_views: &[ModelView],
-    t: &ViewTransform,
-    vertices: &mut Vec<ViewVertex>,
-    codes: &mut Vec<u8>,
-) {
-    for (slot, &(k, _)) in visible.iter().enumerate() {
-        let mv = &model_views[slot];
-        let positions = scene.objects()[k].mesh.positions();
-        let mut eights = positions.chunks_exact(8);
-        for p in &mut eights {
-            let p: &[DVec3; 8] = p.try_into().expect("chunks of eight");
-            let (v, c) = transform_vertices8(mv, t, p);
-            vertices.extend_from_slice(&v);
-            codes.extend_from_slice(&c);
+/// What the vertex pass reads: the visible objects, the first vertex of each
+/// (`bases`), their model-view transforms.
+struct VertexPass<'a> {
+    scene: &'a Scene,
+    visible: &'a [(usize, bool)],
+    bases: &'a [u32],
+    model_views: &'a [ModelView],
+    t: &'a ViewTransform,
+}
+
+impl VertexPass<'_> {
+    /// Transforms the vertices `first..first + v.len()` (numbered across the visible
+    /// objects) into `v` and their outcodes into `c`, eight at a time within each
+    /// object (`transform_vertices8`), writing every element.
+    #[inline(always)]
+    fn run(&self, first: usize, v: &mut [MaybeUninit<ViewVertex>], c: &mut [MaybeUninit<u8>]) {
+        let end = first + v.len();
+        assert_eq!(v.len(), c.len(), "one outcode per vertex");
+        let mut written = 0;
+        let slot0 = self
+            .bases
+            .partition_point(|&b| b as usize <= first)
+            .saturating_sub(1);
+        for slot in slot0..self.visible.len() {
+            let (b0, b1) = (self.bases[slot] as usize, self.bases[slot + 1] as usize);
+            let (lo, hi) = (first.max(b0), end.min(b1));
+            if lo >= hi {
+                if b0 >= end {
+                    break;
+                }
+                continue;
+            }
+            let mv = &self.model_views[slot];
+            let positions =
+                &self.scene.objects()[self.visible[slot].0].mesh.positions()[lo - b0..hi - b0];
+            let (vs, cs) = (
+                &mut v[lo - first..hi - first],
+                &mut c[lo - first..hi - first],
+            );
+            let mut eights = positions.chunks_exact(8);
+            let mut vs8 = vs.chunks_exact_mut(8);
+            let mut cs8 = cs.chunks_exact_mut(8);
+            for ((p, vo), co) in (&mut eights).zip(&mut vs8).zip(&mut cs8) {
+                let p: &[DVec3; 8] = p.try_into().expect("chunks of eight");
+                let (tv, tc) = transform_vertices8(mv, self.t, p);
+                for ((vo, co), (tv, tc)) in vo.iter_mut().zip(co).zip(tv.into_iter().zip(tc)) {
+                    vo.write(tv);
+                    co.write(tc);
+                }
+                written += 8;
+            }
+            let rest = eights.remainder();
+            for ((&p, vo), co) in rest
+                .iter()
+                .zip(vs8.into_remainder())
+                .zip(cs8.into_remainder())
+            {
+                let (tv, tc) = transform_vertex(mv, self.t, p);
+                vo.write(tv);
+                co.write(tc);
+                written += 1;
+            }
         }
-        for &p in eights.remainder() {
-            let (v, c) = transform_vertex(mv, t, p);
-            vertices.push(v);
-            codes.push(c);
-        }
+        assert_eq!(written, v.len(), "every vertex of the run transformed");
     }
-}
 
-/// [`transform_serial`] compiled for AVX2 (same operations, so the same results: the
-/// compiler does not fuse multiplies and adds).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn transform_serial_avx2(
-    scene: &Scene,
-    visible: &[(usize, bool)],
-    model_views: &[ModelView],
-    t: &ViewTransform,
-    vertices: &mut Vec<ViewVertex>,
-    codes: &mut Vec<u8>,
-) {
-    transform_serial(scene, visible, model_views, t, vertices, codes);
-}
+    /// [`VertexPass::run`] compiled for the fastest instructions this processor has
+    /// (the same operations, so the same bits: the compiler fuses no multiply and add).
+    fn run_fastest(
+        &self,
+        first: usize,
+        v: &mut [MaybeUninit<ViewVertex>],
+        c: &mut [MaybeUninit<u8>],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::raster::avx512::Avx512::new().is_some() {
+            // SAFETY: `Avx512::new` checked AVX-512 F, VL, BW and DQ, which imply AVX2.
+            unsafe { self.run_avx512(first, v, c) };
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 was just detected.
+            unsafe { self.run_avx2(first, v, c) };
+            return;
+        }
+        self.run(first, v, c);
+    }
 
-/// [`transform_serial`] compiled for AVX-512 (eight doubles a lane vector; same
-/// operations, so the same results).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx512f,avx512vl,avx512dq")]
-fn transform_serial_avx512(
-    scene: &Scene,
-    visible: &[(usize, bool)],
-    model_views: &[ModelView],
-    t: &ViewTransform,
-    vertices: &mut Vec<ViewVertex>,
-    codes: &mut Vec<u8>,
-) {
-    transform_serial(scene, visible, model_views, t, vertices, codes);
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn run_avx2(&self, first: usize, v: &mut [MaybeUninit<ViewVertex>], c: &mut [MaybeUninit<u8>]) {
+        self.run(first, v, c);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512dq")]
+    fn run_avx512(
+        &self,
+        first: usize,
+        v: &mut [MaybeUninit<ViewVertex>],
+        c: &mut [MaybeUninit<u8>],
+    ) {
+        self.run(first, v, c);
+    }
 }
 
 /// What the face pass reads.
@@ -498,12 +545,32 @@ mod tests {
     use super::*;
     use crate::{Camera, Viewport};
 
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn the_avx2_vertex_pass_equals_the_portable_one() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            return;
+    /// Runs the vertex pass over `0..total` in runs of `run` vertices with `f`.
+    fn in_runs(
+        pass: &VertexPass<'_>,
+        total: usize,
+        run: usize,
+        f: impl Fn(&VertexPass<'_>, usize, &mut [MaybeUninit<ViewVertex>], &mut [MaybeUninit<u8>]),
+    ) -> (Vec<ViewVertex>, Vec<u8>) {
+        let blank = ViewVertex {
+            x: 0.0,
+            y: 0.0,
+            zq: 0.0,
+            eye: DVec3::ZERO,
+        };
+        let mut v = vec![MaybeUninit::new(blank); total];
+        let mut c = vec![MaybeUninit::new(0xffu8); total];
+        for (k, (v, c)) in v.chunks_mut(run).zip(c.chunks_mut(run)).enumerate() {
+            f(pass, k * run, v, c);
         }
+        // SAFETY: every element was initialised above (and overwritten by the pass).
+        let v = v.into_iter().map(|m| unsafe { m.assume_init() }).collect();
+        let c = c.into_iter().map(|m| unsafe { m.assume_init() }).collect();
+        (v, c)
+    }
+
+    #[test]
+    fn the_vertex_pass_equals_one_vertex_at_a_time_in_any_runs_and_kernels() {
         // The default demo from a camera that sees some vertices and not others
         // (outcodes, NaN screen positions), and every object in the pass.
         let scene = crate::scene::demo::default_scene();
@@ -521,6 +588,11 @@ mod tests {
             .iter()
             .map(|&(k, _)| t.model_view(&scene.objects()[k].transform))
             .collect();
+        let mut bases = vec![0u32];
+        for &(k, _) in &visible {
+            bases.push(bases.last().unwrap() + scene.objects()[k].mesh.positions().len() as u32);
+        }
+        let total = *bases.last().unwrap() as usize;
         // The reference: one vertex at a time.
         let (mut v0, mut c0) = (Vec::new(), Vec::new());
         for (slot, &(k, _)) in visible.iter().enumerate() {
@@ -530,24 +602,55 @@ mod tests {
                 c0.push(c);
             }
         }
-        let (mut v1, mut c1, mut v2, mut c2) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        transform_serial(&scene, &visible, &model_views, &t, &mut v1, &mut c1);
-        // SAFETY: AVX2 was just detected.
-        unsafe { transform_serial_avx2(&scene, &visible, &model_views, &t, &mut v2, &mut c2) };
-        assert!(v1.len() > 100 && c1.iter().any(|&c| c != 0) && c1.contains(&0));
-        assert_eq!(c0, c1);
-        assert_eq!(c1, c2);
-        assert_eq!(bits(&v0), bits(&v1));
-        assert_eq!(bits(&v1), bits(&v2));
-        if crate::raster::avx512::Avx512::new().is_some() {
-            let (mut v3, mut c3) = (Vec::new(), Vec::new());
-            // SAFETY: `Avx512::new` checked the features.
-            unsafe {
-                transform_serial_avx512(&scene, &visible, &model_views, &t, &mut v3, &mut c3)
-            };
-            assert_eq!(c1, c3);
-            assert_eq!(bits(&v1), bits(&v3));
+        assert!(visible.len() > 2 && total > 100 && c0.iter().any(|&c| c != 0) && c0.contains(&0));
+        let pass = VertexPass {
+            scene: &scene,
+            visible: &visible,
+            bases: &bases,
+            model_views: &model_views,
+            t: &t,
+        };
+        // Runs that start inside objects and span several, as the parallel pass cuts
+        // them, with every kernel.
+        for run in [total, 8, 24, 1000, 3] {
+            let (v, c) = in_runs(&pass, total, run, |p, first, v, c| p.run(first, v, c));
+            assert_eq!((bits(&v), &c), (bits(&v0), &c0), "portable, runs of {run}");
+            let (v, c) = in_runs(&pass, total, run, |p, first, v, c| {
+                p.run_fastest(first, v, c)
+            });
+            assert_eq!((bits(&v), &c), (bits(&v0), &c0), "fastest, runs of {run}");
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: AVX2 was just detected.
+                let (v, c) = in_runs(&pass, total, run, |p, first, v, c| unsafe {
+                    p.run_avx2(first, v, c)
+                });
+                assert_eq!((bits(&v), &c), (bits(&v0), &c0), "AVX2, runs of {run}");
+            }
         }
+    }
+
+    #[cfg(feature = "parallel")]
+    #[test]
+    fn the_parallel_vertex_pass_equals_the_serial_one() {
+        let scene = crate::scene::demo::sphere(300, 150);
+        let cam = scene.default_camera(1.5);
+        let t = ViewTransform::new(&cam, Viewport::new(160, 90).unwrap());
+        let visible = [(0, false)];
+        let total = scene.objects()[0].mesh.positions().len();
+        assert!(
+            total >= PARALLEL_MIN,
+            "{total} vertices take the parallel pass"
+        );
+        let bases = [0, total as u32];
+        let serial = transform_vertices(&scene, &visible, &bases, &t, 1);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        let parallel = pool.install(|| transform_vertices(&scene, &visible, &bases, &t, 3));
+        assert_eq!(bits(&serial.0), bits(&parallel.0));
+        assert_eq!(serial.1, parallel.1);
     }
 
     fn bits(v: &[ViewVertex]) -> Vec<[u64; 6]> {
