@@ -270,6 +270,7 @@ fn draw_band_impl<L: Lanes>(
     fill: FillRule,
     band: &mut Band<'_>,
 ) -> super::Counts {
+    let start = std::time::Instant::now();
     let (_, _, faces) = view.polygon_arrays();
     let (width, height, y0) = (band.width, band.height, band.y0);
     let w = width as usize;
@@ -388,6 +389,7 @@ fn draw_band_impl<L: Lanes>(
             break;
         }
     }
+    let small_done = std::time::Instant::now();
     // The big polygons into the bins of their tiles nearest first (one sort for all
     // bins), so that each tile draws them nearest first: the blocks they fill hide
     // the polygons behind them.
@@ -406,6 +408,7 @@ fn draw_band_impl<L: Lanes>(
         };
         put_in_bins(&mut bins, rect, k);
     }
+    let binned = std::time::Instant::now();
     let depth = view.transform().key_depths();
     let mut tile_buffer = Box::new(TileBuffer {
         keys: [0.0; (TILE * TILE) as usize],
@@ -468,10 +471,23 @@ fn draw_band_impl<L: Lanes>(
             block::resolve(l, &t, tile, keys, ids, w, y0, depth);
         }
     }
+    let end = std::time::Instant::now();
     super::Counts {
         drawn,
         tested: counts.tested,
         written: counts.written,
+        // A big polygon reaching several bands counts in the band of its first row.
+        big: big_triangles
+            .iter()
+            .map(|b| b.0.rect)
+            .chain(big.iter().map(|b| b.0.rect()))
+            .filter(|r| r.y0 >= y0)
+            .count() as u64,
+        seconds: [
+            (small_done - start).as_secs_f64(),
+            (binned - small_done).as_secs_f64(),
+            (end - binned).as_secs_f64(),
+        ],
     }
 }
 

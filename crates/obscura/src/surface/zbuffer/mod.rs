@@ -41,6 +41,12 @@
 //!   rows drawn in parallel (the same frame as one thread: a pixel's result depends on
 //!   the polygons covering it only).
 //!
+//! Stats: `polygons`, `polygons_drawn` (those covering a sample), `pixels_tested`,
+//! `pixels_written`; the fast path adds `big_polygons` (drawn tile by tile) and the
+//! milliseconds of its phases, `setup_and_small_ms` (every polygon set up, the small
+//! ones drawn), `binning_ms` and `tiles_ms` (the big ones drawn, the frame resolved),
+//! summed over the bands when several threads draw.
+//!
 //! # Tolerance
 //! The per-pixel plane and the reference's serial stepping differ by a few units in
 //! the last place of the `f64` key, so after rounding to `f32` a key may differ by one
@@ -109,15 +115,20 @@ fn render_scheduled(
     } else {
         fast::draw_all(view, options.fill_rule, kernel, &mut frame)
     };
-    Ok((frame, counts.stats(view)))
+    Ok((frame, counts.fast_stats(view)))
 }
 
-/// Counts of what the z-buffer did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Counts of what the z-buffer did, and the seconds of its phases.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Counts {
     drawn: u64,
     tested: u64,
     written: u64,
+    /// Polygons kept for the tiles (wider or taller than the small ones).
+    big: u64,
+    /// Seconds: every polygon set up and the small ones drawn; the big ones sorted
+    /// and binned; the tiles drawn and the frame resolved.
+    seconds: [f64; 3],
 }
 
 impl Counts {
@@ -125,6 +136,10 @@ impl Counts {
         self.drawn += o.drawn;
         self.tested += o.tested;
         self.written += o.written;
+        self.big += o.big;
+        for (a, b) in self.seconds.iter_mut().zip(o.seconds) {
+            *a += b;
+        }
     }
 
     fn stats(self, view: &PreparedView<'_>) -> Stats {
@@ -133,6 +148,22 @@ impl Counts {
         stats.set("polygons_drawn", self.drawn as f64);
         stats.set("pixels_tested", self.tested as f64);
         stats.set("pixels_written", self.written as f64);
+        stats
+    }
+
+    /// [`Counts::stats`] with the fast path's own figures: the big polygons and the
+    /// milliseconds of each phase (summed over bands, so thread time when several
+    /// threads draw).
+    fn fast_stats(self, view: &PreparedView<'_>) -> Stats {
+        let mut stats = self.stats(view);
+        stats.set("big_polygons", self.big as f64);
+        let ms = |s: f64| (s * 1e5).round() / 100.0;
+        for (name, &s) in ["setup_and_small_ms", "binning_ms", "tiles_ms"]
+            .iter()
+            .zip(&self.seconds)
+        {
+            stats.set(name, ms(s));
+        }
         stats
     }
 }
