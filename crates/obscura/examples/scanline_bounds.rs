@@ -21,34 +21,20 @@
 
 use std::time::Instant;
 
-use glam::DVec3;
+mod common;
+
 use obscura::raster::FillRule;
 use obscura::surface::{Algorithm, RenderOptions, render};
-use obscura::{Camera, PrepareOptions, Scene, Viewport, prepare};
+use obscura::{PrepareOptions, prepare};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let path = args
-        .get(1)
-        .cloned()
-        .unwrap_or_else(|| "../shared/data/sponza.obj".into());
-    let runs: usize = args.get(2).map_or(Ok(10), |s| s.parse())?;
-    let scene = Scene::load(&path)?;
-    let viewport = Viewport::new(1920, 1080)?;
-    let camera = if path.ends_with("sponza.obj") {
-        let mut c = Camera::perspective(
-            DVec3::new(0.0, -10.0, 2.0),
-            DVec3::new(0.0, 10.0, 4.0),
-            DVec3::Z,
-            60.0,
-            0.1,
-            100.0,
-        );
-        c.fit_depth_range(&scene.bounds());
-        c
-    } else {
-        scene.default_camera(viewport.aspect())
-    };
+    let common::Measured {
+        path,
+        scene,
+        camera,
+        viewport,
+        runs,
+    } = common::from_args(10)?;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     Ok(pool.install(|| -> Result<(), obscura::Error> {
         let view = prepare(&scene, &camera, viewport, &PrepareOptions::default())?;

@@ -30,40 +30,26 @@
 
 use std::time::Instant;
 
-use glam::DVec3;
+mod common;
+
 use obscura::raster::block::{self, Align, BlockSetup, BlockTarget, Counts};
 use obscura::raster::lanes::{DepthOfKey, Lanes, Portable};
 use obscura::raster::{FillRule, PixelRect};
 use obscura::surface::RenderOptions;
 use obscura::surface::zbuffer::{Kernel, render_with};
-use obscura::{Camera, PrepareOptions, PreparedView, Scene, Viewport, prepare};
+use obscura::{PrepareOptions, PreparedView, prepare};
 
 /// Small triangles: at most this many pixels on a side (the z-buffer's `BIG`).
 const SMALL: u32 = 64;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let path = args
-        .get(1)
-        .cloned()
-        .unwrap_or_else(|| "../shared/data/sponza.obj".into());
-    let runs: usize = args.get(2).map_or(Ok(20), |s| s.parse())?;
-    let scene = Scene::load(&path)?;
-    let viewport = Viewport::new(1920, 1080)?;
-    let camera = if path.ends_with("sponza.obj") {
-        let mut c = Camera::perspective(
-            DVec3::new(0.0, -10.0, 2.0),
-            DVec3::new(0.0, 10.0, 4.0),
-            DVec3::Z,
-            60.0,
-            0.1,
-            100.0,
-        );
-        c.fit_depth_range(&scene.bounds());
-        c
-    } else {
-        scene.default_camera(viewport.aspect())
-    };
+    let common::Measured {
+        path,
+        scene,
+        camera,
+        viewport,
+        runs,
+    } = common::from_args(20)?;
     let options = RenderOptions::default();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     Ok(pool.install(|| -> Result<(), obscura::Error> {
