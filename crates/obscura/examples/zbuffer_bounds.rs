@@ -36,11 +36,8 @@ use obscura::raster::block::{self, Align, BlockSetup, BlockTarget, Counts};
 use obscura::raster::lanes::{DepthOfKey, Lanes, Portable};
 use obscura::raster::{FillRule, PixelRect};
 use obscura::surface::RenderOptions;
-use obscura::surface::zbuffer::{Kernel, render_with};
+use obscura::surface::zbuffer::{BIG, Kernel, render_with};
 use obscura::{PrepareOptions, PreparedView, prepare};
-
-/// Small triangles: at most this many pixels on a side (the z-buffer's `BIG`).
-const SMALL: u32 = 64;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let common::Measured {
@@ -120,7 +117,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     })?)
 }
 
-/// The view's triangles with a sample and at most [`SMALL`] pixels on a side, set up
+/// The view's triangles with a sample and at most [`BIG`] pixels on a side, set up
 /// for the block rasterizer, with their encoded ids.
 fn small_triangles(view: &PreparedView<'_>) -> Vec<(BlockSetup<3>, u32)> {
     let (starts, indices, faces) = view.polygon_arrays();
@@ -144,7 +141,7 @@ fn small_triangles(view: &PreparedView<'_>) -> Vec<(BlockSetup<3>, u32)> {
         ) else {
             continue;
         };
-        if t.rect.x1 - t.rect.x0 <= SMALL && t.rect.y1 - t.rect.y0 <= SMALL {
+        if t.rect.x1 - t.rect.x0 <= BIG && t.rect.y1 - t.rect.y0 <= BIG {
             out.push((t, !faces[p]));
         }
     }

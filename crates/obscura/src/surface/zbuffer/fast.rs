@@ -74,8 +74,9 @@ impl Kernel {
 /// Side of a tile, in pixels: a tile's keys and ids take 32 KiB.
 pub(super) const TILE: u32 = 64;
 
-/// Polygons wider or taller than this many pixels are drawn tile by tile.
-const BIG: u32 = 64;
+/// Polygons wider or taller than this many pixels are drawn tile by tile (the
+/// `big_polygons` of the stats); the others are drawn at once.
+pub const BIG: u32 = 64;
 
 /// Marks a bin entry that indexes the big polygons other than triangles.
 const OTHER: u32 = 1 << 31;

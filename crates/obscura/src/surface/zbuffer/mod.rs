@@ -67,8 +67,8 @@ use crate::surface::{RenderOptions, Stats};
 use crate::view::PreparedView;
 use crate::{Frame, Result};
 
-pub use fast::Kernel;
 pub(crate) use fast::resolve_frame;
+pub use fast::{BIG, Kernel};
 
 /// Renders a prepared view with the z-buffer (the fast implementation; same result as
 /// [`render_reference`]).

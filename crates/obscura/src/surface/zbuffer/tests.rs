@@ -357,13 +357,13 @@ fn big_polygons_and_phase_times_are_reported() {
     let cam = scene.default_camera(vp.aspect());
     let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
     let opts = RenderOptions::default();
-    // Independently: the polygons whose sample box is wider or taller than 64 pixels.
+    // Independently: the polygons whose sample box is wider or taller than BIG pixels.
     let big = view
         .polygons()
         .filter_map(|p| p.coverage(opts.fill_rule, vp.width, vp.height))
         .filter(|c| {
             let r = c.rect();
-            r.x1 - r.x0 > 64 || r.y1 - r.y0 > 64
+            r.x1 - r.x0 > BIG || r.y1 - r.y0 > BIG
         })
         .count();
     assert!(big >= 10 && big * 4 < view.polygon_count(), "{big} big");
