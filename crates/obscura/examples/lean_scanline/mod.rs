@@ -37,13 +37,25 @@ fn surely_nearer(a: f64, b: f64) -> bool {
     a - b > (a.abs() + b.abs()) * (1.0 / (1u64 << 22) as f64) + 1e-15
 }
 
-/// `ceil(v)` clamped to `0..=hi` without a library call (`|v| < 2^51`).
+/// `floor(v)` without a library call (the target may lack a rounding instruction),
+/// for `|v| < 2^51`.
 #[inline(always)]
-fn ceil_clamped(v: f64, hi: f64) -> u32 {
+fn floor(v: f64) -> f64 {
     const ROUND: f64 = 6_755_399_441_055_744.0;
-    let v = v.clamp(0.0, hi);
     let r = (v + ROUND) - ROUND;
-    (r + f64::from(u8::from(r < v))) as u32
+    r - f64::from(u8::from(r > v))
+}
+
+/// `ceil(v)`, see [`floor`].
+#[inline(always)]
+fn ceil(v: f64) -> f64 {
+    -floor(-v)
+}
+
+/// `v` clamped to `0..=hi` as an index (0 for NaN).
+#[inline(always)]
+fn index(v: f64, hi: f64) -> u32 {
+    v.clamp(0.0, hi) as u32
 }
 
 /// A live face with all the sweep reads and writes, together: its long edge (top to
@@ -143,10 +155,11 @@ pub fn render(lean: &mut Lean, view: &PreparedView<'_>, ids: &mut [u32], keys: &
         let maxy = v[0].y.max(v[1].y).max(v[2].y);
         let minx = v[0].x.min(v[1].x).min(v[2].x);
         let maxx = v[0].x.max(v[1].x).max(v[2].x);
-        let y0 = ceil_clamped(miny - 0.5, h);
-        let y1 = ceil_clamped(maxy - 0.5 + 1e-300, h);
-        let x0 = ceil_clamped(minx - 0.5, w);
-        let x1 = ceil_clamped(maxx - 0.5 + 1e-300, w);
+        // The rows and columns whose sample lines the box reaches.
+        let y0 = index(ceil(miny - 0.5), h);
+        let y1 = index(floor(maxy - 0.5) + 1.0, h);
+        let x0 = index(ceil(minx - 0.5), w);
+        let x1 = index(floor(maxx - 0.5) + 1.0, w);
         let mut row = u32::MAX;
         if y0 < y1 && x0 < x1 {
             row = y0;
@@ -205,7 +218,7 @@ pub fn render(lean: &mut Lean, view: &PreparedView<'_>, ids: &mut [u32], keys: &
             } else {
                 0.0
             };
-            let switch = ceil_clamped(vb.y - 0.5, h);
+            let switch = index(ceil(vb.y - 0.5), h);
             let (x_short, d_short) = if y >= switch {
                 (vb.x + (py - vb.y) * d_lower, d_lower)
             } else {
@@ -219,7 +232,7 @@ pub fn render(lean: &mut Lean, view: &PreparedView<'_>, ids: &mut [u32], keys: &
                 x_lower: vb.x + (f64::from(switch) + 0.5 - vb.y) * d_lower,
                 d_lower,
                 switch_row: switch,
-                last_row: ceil_clamped(vc.y - 0.5 + 1e-300, h).saturating_sub(1),
+                last_row: index(floor(vc.y - 0.5), h - 1.0),
                 // With the vertices in y order, a negative area puts the middle vertex
                 // left of the long edge.
                 short_left: area2 < 0.0,
@@ -247,8 +260,9 @@ pub fn render(lean: &mut Lean, view: &PreparedView<'_>, ids: &mut [u32], keys: &
             let s = l.slot as usize;
             let (xs, xl) = (l.x_short, l.x_long);
             let (left, right) = if l.short_left { (xs, xl) } else { (xl, xs) };
-            let lo = ceil_clamped(left - 0.5, w);
-            let hi = ceil_clamped(right - 0.5, w);
+            // The pixels whose centres lie in `[left, right)`.
+            let lo = index(ceil(left - 0.5), w);
+            let hi = index(ceil(right - 0.5), w);
             l.x_short = xs + l.d_short;
             l.x_long = xl + l.d_long;
             let done = y >= l.last_row;
