@@ -107,7 +107,8 @@ impl Faces {
 /// Reused buffers of [`render`].
 #[derive(Default)]
 pub struct Lean {
-    starts: Vec<u32>,
+    /// Per row (and one past the last): where its triangles start in `by_row`.
+    row_starts: Vec<u32>,
     first_rows: Vec<u32>,
     by_row: Vec<u32>,
     triangles: Vec<[u32; 4]>,
@@ -137,7 +138,7 @@ pub fn render(lean: &mut Lean, view: &PreparedView<'_>, ids: &mut [u32], keys: &
     // The table: triangles bucketed by the first row whose sample line they reach.
     let first_rows = &mut lean.first_rows;
     first_rows.clear();
-    let bucket_starts = &mut lean.starts;
+    let bucket_starts = &mut lean.row_starts;
     bucket_starts.clear();
     bucket_starts.resize(height as usize + 1, 0);
     // Polygons of more vertices (clipped ones) as fans of triangles.
