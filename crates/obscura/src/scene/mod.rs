@@ -182,6 +182,14 @@ impl Scene {
         load::load_file(Path::new(spec))
     }
 
+    /// [`Scene::load`] with options: what the scene may read and how much it may
+    /// build (see [`load::LoadOptions`]).
+    pub fn load_with(spec: &str, options: &load::LoadOptions) -> Result<Scene> {
+        // The options are plumbed through the loaders by the work on issue 21.
+        let _ = options;
+        Self::load(spec)
+    }
+
     /// Adds an object, checking it, assigning its face ids and computing its bounds
     /// and flags. Returns its index.
     pub fn add(&mut self, desc: ObjectDesc) -> Result<usize> {

@@ -50,6 +50,29 @@ use glam::DVec3;
 use super::{LoadReport, MAX_COORDINATE, MeshBuilder, ObjectDesc, Scene};
 use crate::{Error, Result};
 
+/// How a scene file is loaded: what it may read and how much it may build.
+///
+/// # Example
+/// ```
+/// use obscura::scene::load::LoadOptions;
+/// let options = LoadOptions {
+///     allow_outside_references: true,
+///     ..LoadOptions::default()
+/// };
+/// assert!(options.memory_limit.is_none());
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct LoadOptions {
+    /// Let a scene refer to files outside its own folder tree (absolute paths, `..`
+    /// escapes, `file:` URIs). Off by default: a scene reads only inside the folder of
+    /// the file that refers (the CLI's `--allow-outside-references`).
+    pub allow_outside_references: bool,
+    /// The memory budget of the load in bytes; `None` takes the default budget of a
+    /// run (see the crate's memory budget).
+    pub memory_limit: Option<u64>,
+}
+
 /// What a mesh file yields before it is placed in a scene.
 #[derive(Debug, Default)]
 pub struct Loaded {
