@@ -52,6 +52,9 @@ def note(cls, kind, case, detail=""):
 
 def limit():
     resource.setrlimit(resource.RLIMIT_AS, (MEM_LIMIT, MEM_LIMIT))
+    # A background job of a non-interactive shell starts with SIGINT ignored; the runs
+    # get the default disposition a user's terminal gives them.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 class Run:
@@ -649,7 +652,8 @@ def class_numbers(bin_, root, rng):
                   ["--eye", "nan,0,0"], ["--eye", "inf,0,0"], ["--target", "0,0,-1e308"]):
         r = run(bin_, ["render", "t.obj", "--size", "64x48", "-o", "o.png"] + flags, d)
         n += 1
-        common_checks(cls, " ".join(flags), r, names=(flags[0], flags[0].strip("-")))
+        common_checks(cls, " ".join(flags), r, names=(flags[0], flags[0].strip("-"),
+                                                      "field of view", "camera"))
     for scale in ("1e200", "1e-200", "1e308", "1e-320", "[1e200, 1, 1]", "0", "-0.0", "nan"):
         write(os.path.join(d, "s.toml"), f"[[object]]\nmesh = \"t.obj\"\n\nscale = {scale}\n")
         r = run(bin_, ["render", "s.toml", "--size", "64x48", "-o", "o.png"], d)
