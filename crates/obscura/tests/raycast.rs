@@ -561,6 +561,13 @@ fn check_packets(
     let mut single = TraversalStack::default();
     let mut stack = PacketStack::default();
     let mut hits = 0;
+    // A kernel the processor lacks falls back to the next best: say so, once.
+    if !obscura::cpu::Avx512::is_available() {
+        obscura::cpu::simd_test_skipped("AVX-512", "packets traced with AVX-512 lanes");
+    }
+    if !obscura::cpu::Avx2::is_available() {
+        obscura::cpu::simd_test_skipped("AVX2", "rays traced with the AVX2 build");
+    }
     for (g, rays) in groups.iter().enumerate() {
         let expected: Vec<ClosestHit> = rays
             .iter()

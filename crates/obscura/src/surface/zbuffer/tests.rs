@@ -154,10 +154,17 @@ fn assert_identical(a: &(Frame, Stats), b: &(Frame, Stats), what: &str) {
     assert_eq!(counts(&a.1), counts(&b.1), "{what}: stats differ");
 }
 
+/// The kernels this processor runs; each one it lacks is reported as skipped (a
+/// failure with `OBSCURA_REQUIRE_SIMD=1`).
 fn kernels() -> Vec<Kernel> {
     [Kernel::Portable, Kernel::Avx2, Kernel::Avx512]
         .into_iter()
-        .filter(|k| k.is_available())
+        .filter(|k| {
+            if !k.is_available() {
+                crate::cpu::simd_test_skipped(&format!("{k:?}"), "the fast z-buffer's kernel");
+            }
+            k.is_available()
+        })
         .collect()
 }
 
