@@ -200,25 +200,65 @@ fn help_shows_examples() {
 
 #[test]
 fn compare_writes_a_grid_and_a_table() {
+    // The z-buffer, an exact algorithm and a coarse octree (4 voxels a side, which
+    // must differ): each count of differing pixels is checked against the ids that
+    // `render` writes for the same algorithm, compared here pixel by pixel.
     let dir = tempdir("compare");
-    let o = obscura(
-        &[
-            "compare",
-            "demo:cube",
-            "--size",
-            "40x30",
-            "--algos",
-            "zbuffer",
-            "--json",
-            "c.json",
-        ],
-        &dir,
-    );
+    let common = [
+        "demo:cube",
+        "--size",
+        "40x30",
+        "--octree-depth",
+        "2",
+        "--threads",
+        "1",
+    ];
+    let mut args = vec!["compare"];
+    args.extend(common);
+    args.extend(["--algos", "zbuffer,bsp,octree", "--json", "c.json"]);
+    let o = obscura(&args, &dir);
     assert!(o.status.success(), "{}", text(&o));
-    assert!(text(&o).contains("zbuffer"));
     assert!(dir.join("compare.png").exists());
-    let json = std::fs::read_to_string(dir.join("c.json")).unwrap();
-    assert!(json.contains("\"differing_pixels\": 0"), "{json}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("c.json")).unwrap()).unwrap();
+    let rows = json["algorithms"].as_array().expect("an algorithms array");
+    let ids_of = |algo: &str| {
+        let file = format!("{algo}.npy");
+        let mut args = vec!["render"];
+        args.extend(common);
+        args.extend(["--algo", algo, "--ids", &file, "-o", "r.png"]);
+        let o = obscura(&args, &dir);
+        assert!(o.status.success(), "{}", text(&o));
+        read_npy(&dir.join(&file)).2
+    };
+    let reference = ids_of("zbuffer");
+    let mut names = Vec::new();
+    for row in rows {
+        let algo = row["algorithm"].as_str().unwrap();
+        names.push(algo.to_owned());
+        let ids = ids_of(algo);
+        let expected = ids
+            .chunks(4)
+            .zip(reference.chunks(4))
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(row["differing_pixels"], expected, "{algo}: {json}");
+        let table = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            table
+                .lines()
+                .any(|l| l.split_whitespace().next() == Some(algo)
+                    && l.split_whitespace().nth(2) == Some(&expected.to_string())),
+            "{algo} with {expected} differing pixels in the table: {table}"
+        );
+        if algo == "octree" {
+            assert!(
+                expected > 0,
+                "a 4-voxel octree matches the z-buffer exactly?"
+            );
+        }
+    }
+    assert_eq!(names, ["zbuffer", "bsp", "octree"]);
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -31,6 +31,7 @@
 
 pub mod accel;
 pub mod clip;
+pub mod cpu;
 pub mod cull;
 mod error;
 pub mod frame;

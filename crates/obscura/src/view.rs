@@ -476,6 +476,16 @@ impl PipelineStats {
         });
     }
 
+    /// The one stage whose name starts with `name` (a name may carry a note after it,
+    /// e.g. "faces: clip (Sutherland-Hodgman) (timed above)" for "faces: clip"):
+    /// `None` if no stage or several match. Pick stages by name, not by position.
+    #[must_use]
+    pub fn stage(&self, name: &str) -> Option<&StageStats> {
+        let mut found = self.stages.iter().filter(|s| s.stage.starts_with(name));
+        let first = found.next()?;
+        found.next().is_none().then_some(first)
+    }
+
     /// Total milliseconds of all stages.
     #[must_use]
     pub fn total_ms(&self) -> f64 {
@@ -1092,9 +1102,12 @@ mod tests {
             assert!((vert.depth() - 2.0).abs() < 1e-12);
             assert!((vert.zq - 0.1 / 2.0).abs() < 1e-15);
         }
-        let stats = &v.stats().stages;
-        assert_eq!(stats[2].input, 6);
-        assert_eq!(stats[2].output, 1);
+        let culling = v.stats().stage("faces: back-face culling").unwrap();
+        assert_eq!(culling.input, 6);
+        assert_eq!(culling.output, 1);
+        // Several stages start with "faces:": a name must pick one.
+        assert!(v.stats().stage("faces:").is_none());
+        assert!(v.stats().stage("no such stage").is_none());
     }
 
     #[test]
@@ -1176,7 +1189,7 @@ mod tests {
                 for backface in [BackfaceMode::Closed, BackfaceMode::All, BackfaceMode::Off] {
                     let opts = PrepareOptions::default().with_backface(backface);
                     let expect = reference::prepare_reference(scene, cam, vp, &opts).unwrap();
-                    clipped += expect.stats.stages[4].output;
+                    clipped += expect.stats.stage("faces: clip").unwrap().output;
                     for threads in [1, 2, 3] {
                         #[cfg(feature = "parallel")]
                         let got = rayon::ThreadPoolBuilder::new()

@@ -448,8 +448,10 @@ fn stats_are_consistent() {
     let scene = demo::default_scene();
     let vp = Viewport::new(80, 60).unwrap();
     let v = view(&scene, &scene.default_camera(vp.aspect()), 80, 60);
+    let started = std::time::Instant::now();
     let (_, s) = bsp::render(&v, &options(BspTraversal::BackToFront)).unwrap();
-    let g = |k: &str| s.get(k).unwrap();
+    let wall_ms = started.elapsed().as_secs_f64() * 1e3;
+    let g = |k: &str| s.get(k).unwrap_or_else(|| panic!("stat {k} missing"));
     assert_eq!(
         g("bsp_fragments"),
         scene.polygon_count() as f64 + g("bsp_splits")
@@ -459,7 +461,14 @@ fn stats_are_consistent() {
     assert!(g("fragments_painted") <= g("fragments_visited") - g("fragments_culled"));
     // About half the faces of the closed solids are back faces.
     assert!(g("fragments_culled") > 0.3 * g("bsp_fragments"));
-    assert!(g("build_ms") >= 0.0);
+    // The build time is a measurement inside the render: more than nothing (the tree
+    // has nodes) and no more than the whole call took.
+    assert!(g("bsp_nodes") > 0.0);
+    assert!(
+        g("build_ms") > 0.0 && g("build_ms") <= wall_ms,
+        "build_ms {} outside 0..{wall_ms}",
+        g("build_ms")
+    );
 }
 
 #[test]

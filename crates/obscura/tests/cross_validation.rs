@@ -511,10 +511,14 @@ fn split_pieces_leave_no_cracks_on_lattice_scenes() {
         let (z, _) = render(Algorithm::ZBuffer, &view, &opts).unwrap();
         for algo in algorithms {
             let (frame, stats) = render(algo, &view, &opts).unwrap();
+            let key = if algo == Algorithm::Bsp {
+                "bsp_splits"
+            } else {
+                "splits"
+            };
             let splits = stats
-                .get("bsp_splits")
-                .or(stats.get("splits"))
-                .unwrap_or(0.0);
+                .get(key)
+                .unwrap_or_else(|| panic!("{algo:?} reports no {key}"));
             split_views += usize::from(splits > 0.0);
             let holes: Vec<(usize, u32, u32)> = (0..z.ids.len())
                 .filter(|&i| {

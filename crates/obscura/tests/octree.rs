@@ -244,6 +244,15 @@ fn one_object(mesh: obscura::scene::Mesh, transform: DMat4) -> Scene {
     s
 }
 
+/// The shape called `name` in [`shapes`].
+fn shape(name: &str) -> Scene {
+    shapes()
+        .into_iter()
+        .find(|(n, _)| *n == name)
+        .unwrap_or_else(|| panic!("no shape {name}"))
+        .1
+}
+
 fn shapes() -> Vec<(&'static str, Scene)> {
     vec![
         (
@@ -562,7 +571,7 @@ fn random_tree(seed: u64, depth: u32) -> Octree {
 
 #[test]
 fn neighbours_equal_index_arithmetic() {
-    let torus = &shapes()[2].1;
+    let torus = &shape("torus");
     let trees = vec![
         ("torus", Octree::from_scene(torus, 4).unwrap()),
         ("random 3", random_tree(1, 3)),
@@ -711,7 +720,7 @@ fn child_order_is_front_to_back_for_every_ray_octant() {
 
 #[test]
 fn first_hit_is_the_nearest_partial_voxel() {
-    let scene = &shapes()[2].1; // the torus: rays pass through the hole
+    let scene = &shape("torus"); // rays pass through the hole
     let tree = Octree::from_scene(scene, 5).unwrap();
     let region = *tree.region();
     let partial: Vec<(u32, obscura::geom::Aabb)> = tree

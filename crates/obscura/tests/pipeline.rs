@@ -221,7 +221,7 @@ fn backface_culling_removes_exactly_the_faces_facing_away() {
             let cam = Camera::perspective(eye, DVec3::ZERO, DVec3::Y, 60.0, 0.01, 100.0);
             let vp = Viewport::new(32, 32).unwrap();
             let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
-            let stage = &view.stats().stages[2];
+            let stage = view.stats().stage("faces: back-face culling").unwrap();
             assert_eq!(stage.unit, "faces");
             let expected = (0..o.mesh.polygon_count())
                 .filter(|&p| {
@@ -243,7 +243,10 @@ fn backface_culling_removes_exactly_the_faces_facing_away() {
             )
             .unwrap();
             assert_eq!(
-                off.stats().stages[2].output as usize,
+                off.stats()
+                    .stage("faces: back-face culling")
+                    .unwrap()
+                    .output as usize,
                 o.mesh.polygon_count()
             );
         }
@@ -368,7 +371,7 @@ fn frustum_culling_of_objects_changes_nothing_but_the_work() {
     let mut no_cull = PrepareOptions::default();
     no_cull.frustum_cull_objects = false;
     let off = prepare(&scene, &cam, vp, &no_cull).unwrap();
-    let objects = &on.stats().stages[0];
+    let objects = on.stats().stage("objects: frustum").unwrap();
     assert!(
         objects.output < objects.input,
         "some buildings are outside the view"

@@ -49,7 +49,7 @@ fn coplanar_touching_faces_match_zbuffer() {
 fn clipped_polygons_match_zbuffer() {
     let case = hsr_scenes::crossing_near_plane();
     let view = prepare(&case.scene, &case.camera, case.viewport, &case.prepare).unwrap();
-    let clipped = &view.stats().stages[4];
+    let clipped = view.stats().stage("faces: clip").unwrap();
     assert!(
         clipped.output > 0,
         "the scene must make the pipeline clip faces"

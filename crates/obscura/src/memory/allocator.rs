@@ -499,6 +499,10 @@ mod tests {
     #[test]
     fn large_blocks_lie_in_huge_pages_from_end_to_end() {
         if !super::super::tests::huge_pages_enabled() {
+            eprintln!(
+                "SKIPPED large_blocks_lie_in_huge_pages_from_end_to_end: transparent huge \
+                 pages are off on this system"
+            );
             return;
         }
         let size = 3 * HUGE_PAGE + 100;
@@ -512,7 +516,10 @@ mod tests {
             a.dealloc(p, layout);
             // The kernel may lack free huge pages; it usually has them.
             if kib == 0 {
-                eprintln!("note: no huge page backs the block (memory fragmented?)");
+                eprintln!(
+                    "SKIPPED the huge-page check of large_blocks_lie_in_huge_pages_from_end_to_end: \
+                     no huge page backs the block (memory fragmented?)"
+                );
             } else {
                 // Every page, the first and the last included: 4 of them (more if the
                 // kernel merged a neighbouring mapping of another test into this one).
@@ -580,6 +587,9 @@ mod tests {
     #[test]
     fn freed_blocks_are_reused_whole_split_or_grown_and_zeroed_when_asked() {
         if !cfg!(target_os = "linux") {
+            eprintln!(
+                "SKIPPED freed_blocks_are_reused_whole_split_or_grown_and_zeroed_when_asked: the allocator maps memory only on Linux"
+            );
             return;
         }
         let a = HugePageAllocator::new();
@@ -622,6 +632,9 @@ mod tests {
     #[test]
     fn at_most_the_limits_are_kept() {
         if !cfg!(target_os = "linux") {
+            eprintln!(
+                "SKIPPED at_most_the_limits_are_kept: the allocator maps memory only on Linux"
+            );
             return;
         }
         // SAFETY: blocks freed once with their layouts, never touched.

@@ -1,7 +1,7 @@
 //! AVX-512 lanes for the block rasterizer (x86-64 only): [`Lanes`] with eight `f64` in
 //! a 512-bit register and masks in mask registers, for processors that have AVX-512 F,
-//! VL, BW and DQ (detected at run time; [`Avx512::new`] is the only way to get the
-//! value, so holding one proves the instructions exist).
+//! VL, BW and DQ (detected at run time; [`Avx512::new`], of [`crate::cpu`], is the only
+//! way to get the value, so holding one proves the instructions exist).
 //!
 //! Each operation is the one of [`Portable`](super::lanes::Portable) on eight lanes at
 //! once, with the same rounding (IEEE operations, no fused multiply-add, conversions
@@ -20,23 +20,9 @@ use std::arch::x86_64::*;
 
 use super::lanes::{DepthOfKey, Lanes, MIN_KEY, lanes_below, lanes_below16};
 
-/// AVX-512 lanes. A value exists only on a processor with AVX-512 F, VL, BW and DQ.
-#[derive(Clone, Copy, Debug)]
-pub struct Avx512 {
-    _proof: (),
-}
-
-impl Avx512 {
-    /// The lanes, if this processor runs them.
-    #[must_use]
-    pub fn new() -> Option<Self> {
-        (is_x86_feature_detected!("avx512f")
-            && is_x86_feature_detected!("avx512vl")
-            && is_x86_feature_detected!("avx512bw")
-            && is_x86_feature_detected!("avx512dq"))
-        .then_some(Avx512 { _proof: () })
-    }
-}
+/// AVX-512 lanes: the crate's one AVX-512 token ([`crate::cpu::Avx512`]), whose
+/// constructor checks every feature the kernels that take it enable.
+pub use crate::cpu::Avx512;
 
 impl Lanes for Avx512 {
     type F = __m512d;

@@ -1032,8 +1032,14 @@ mod tests {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
-    fn triangles8_avx512(p: &TrianglePoints, fill: FillRule, w: u32, h: u32) -> TriangleBatch {
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
+    fn triangles8_avx512(
+        _: super::super::avx512::Avx512,
+        p: &TrianglePoints,
+        fill: FillRule,
+        w: u32,
+        h: u32,
+    ) -> TriangleBatch {
         triangles8(p, fill, w, h)
     }
 
@@ -1071,6 +1077,15 @@ mod tests {
         let mut rng = SplitMix64(41);
         let (w, h) = (120, 80);
         let mut valid = 0;
+        #[cfg(target_arch = "x86_64")]
+        let fast = crate::cpu::Avx512::new();
+        #[cfg(target_arch = "x86_64")]
+        if fast.is_none() {
+            crate::cpu::simd_test_skipped(
+                "AVX-512",
+                "eight triangles set up with AVX-512 against one at a time",
+            );
+        }
         for _ in 0..4000 {
             let tris: Vec<_> = (0..8).map(|_| random_triangle(&mut rng)).collect();
             let mut pts = TrianglePoints::default();
@@ -1082,13 +1097,9 @@ mod tests {
             for fill in [FillRule::TopLeft, FillRule::Inclusive] {
                 let mut batches = vec![triangles8(&pts, fill, w, h)];
                 #[cfg(target_arch = "x86_64")]
-                if std::arch::is_x86_feature_detected!("avx512f")
-                    && std::arch::is_x86_feature_detected!("avx512vl")
-                    && std::arch::is_x86_feature_detected!("avx512bw")
-                    && std::arch::is_x86_feature_detected!("avx512dq")
-                {
-                    // SAFETY: the features were just detected.
-                    batches.push(unsafe { triangles8_avx512(&pts, fill, w, h) });
+                if let Some(cpu) = fast {
+                    // SAFETY: `Avx512::new` checked every feature `triangles8_avx512` enables.
+                    batches.push(unsafe { triangles8_avx512(cpu, &pts, fill, w, h) });
                 }
                 for batch in &batches {
                     for (l, t) in tris.iter().enumerate() {
@@ -1128,7 +1139,7 @@ mod tests {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
     fn draw_alone_avx512(
         l: super::super::avx512::Avx512,
         s: &BlockSetup<3>,
@@ -1149,6 +1160,15 @@ mod tests {
         let mut rng = SplitMix64(23);
         let (w, h) = (120, 80);
         let (mut paired, mut narrow, mut wide) = (0, 0, 0);
+        #[cfg(target_arch = "x86_64")]
+        let fast = crate::cpu::Avx512::new();
+        #[cfg(target_arch = "x86_64")]
+        if fast.is_none() {
+            crate::cpu::simd_test_skipped(
+                "AVX-512",
+                "polygons drawn with AVX-512 lanes against portable ones",
+            );
+        }
         for _ in 0..6000 {
             let t = random_triangle(&mut rng);
             for fill in [FillRule::TopLeft, FillRule::Inclusive] {
@@ -1172,9 +1192,9 @@ mod tests {
                     draw_alone(super::super::lanes::Portable, &s, Align::Grid, w, h),
                 ];
                 #[cfg(target_arch = "x86_64")]
-                if let Some(l) = super::super::avx512::Avx512::new() {
+                if let Some(l) = fast {
                     for align in [Align::Polygon, Align::Grid] {
-                        // SAFETY: `Avx512::new` checked the features.
+                        // SAFETY: `Avx512::new` checked every feature `draw_alone_avx512` enables.
                         runs.push(unsafe { draw_alone_avx512(l, &s, align, w, h) });
                     }
                 }

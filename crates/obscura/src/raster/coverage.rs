@@ -300,14 +300,33 @@ mod tests {
 
     #[test]
     fn shared_edges_cover_each_pixel_exactly_once() {
-        // A fan of triangles around a centre, vertices on pixel centres and off them.
+        // A fan of triangles around a centre on a pixel centre, ring vertices on the
+        // 1/8-pixel lattice (on pixel centres and off them), so an exact integer test
+        // (coordinates times 8) decides, independently of the code under test, which
+        // samples lie strictly inside or strictly outside the ring.
         let c = (7.5, 7.5);
         let ring: Vec<(f64, f64)> = (0..13)
             .map(|k| {
                 let a = k as f64 * std::f64::consts::TAU / 13.0;
-                (7.5 + 6.3 * a.cos(), 7.5 + 6.3 * a.sin())
+                let snap = |v: f64| (v * 8.0).round() / 8.0;
+                (snap(7.5 + 6.3 * a.cos()), snap(7.5 + 6.3 * a.sin()))
             })
             .collect();
+        let lattice: Vec<(i64, i64)> = ring
+            .iter()
+            .map(|&(x, y)| ((x * 8.0) as i64, (y * 8.0) as i64))
+            .collect();
+        // Twice the signed area of (p, q, s), exactly.
+        let cross = |p: (i64, i64), q: (i64, i64), s: (i64, i64)| {
+            (q.0 - p.0) * (s.1 - p.1) - (q.1 - p.1) * (s.0 - p.0)
+        };
+        let n = lattice.len();
+        let edges = || (0..n).map(|k| (lattice[k], lattice[(k + 1) % n]));
+        // The input is what the test needs: a strictly convex ring, one orientation.
+        let turn = (0..n)
+            .map(|k| cross(lattice[k], lattice[(k + 1) % n], lattice[(k + 2) % n]).signum())
+            .collect::<Vec<_>>();
+        assert!(turn.iter().all(|&t| t == turn[0] && t != 0), "{turn:?}");
         let mut hits = vec![0u8; 16 * 16];
         for k in 0..ring.len() {
             let tri = [c, ring[k], ring[(k + 1) % ring.len()]];
@@ -319,16 +338,31 @@ mod tests {
                 }
             }
         }
-        assert!(hits.iter().all(|&h| h <= 1));
-        // Every pixel centre strictly inside the ring polygon is covered.
-        let ring_cov = PolygonCoverage::new(&ring, FillRule::TopLeft, 16, 16).unwrap();
-        for j in 0..16 {
-            for i in 0..16 {
-                if ring_cov.covers(i, j) {
-                    assert_eq!(hits[(j * 16 + i) as usize], 1, "pixel {i},{j}");
+        let (mut inside, mut outside) = (0, 0);
+        for j in 0..16i64 {
+            for i in 0..16i64 {
+                let s = (8 * i + 4, 8 * j + 4);
+                let h = hits[(j * 16 + i) as usize];
+                let sides: Vec<i64> = edges().map(|(p, q)| cross(p, q, s) * turn[0]).collect();
+                if sides.iter().all(|&e| e > 0) {
+                    // Strictly inside the ring: in exactly one triangle of the fan
+                    // (on a spoke or the centre, the rule gives it to one).
+                    assert_eq!(h, 1, "pixel {i},{j} inside the ring");
+                    inside += 1;
+                } else if sides.iter().any(|&e| e < 0) {
+                    assert_eq!(h, 0, "pixel {i},{j} outside the ring");
+                    outside += 1;
+                } else {
+                    // On the ring's boundary: the rule decides, but never twice.
+                    assert!(h <= 1, "pixel {i},{j} on the ring");
                 }
             }
         }
+        // About the disc's area, pi * 6.3^2 = 125 pixels, and the rest outside.
+        assert!(
+            (110..140).contains(&inside) && outside > 100,
+            "{inside} {outside}"
+        );
     }
 
     #[test]

@@ -273,15 +273,15 @@ impl VertexPass<'_> {
         c: &mut [MaybeUninit<u8>],
     ) {
         #[cfg(target_arch = "x86_64")]
-        if crate::raster::avx512::Avx512::new().is_some() {
-            // SAFETY: `Avx512::new` checked AVX-512 F, VL, BW and DQ, which imply AVX2.
-            unsafe { self.run_avx512(first, v, c) };
+        if let Some(cpu) = crate::cpu::Avx512::new() {
+            // SAFETY: `Avx512::new` checked every feature `run_avx512` enables.
+            unsafe { self.run_avx512(cpu, first, v, c) };
             return;
         }
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was just detected.
-            unsafe { self.run_avx2(first, v, c) };
+        if let Some(cpu) = crate::cpu::Avx2::new() {
+            // SAFETY: `Avx2::new` checked every feature `run_avx2` enables.
+            unsafe { self.run_avx2(cpu, first, v, c) };
             return;
         }
         self.run(first, v, c);
@@ -289,14 +289,21 @@ impl VertexPass<'_> {
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn run_avx2(&self, first: usize, v: &mut [MaybeUninit<ViewVertex>], c: &mut [MaybeUninit<u8>]) {
+    fn run_avx2(
+        &self,
+        _: crate::cpu::Avx2,
+        first: usize,
+        v: &mut [MaybeUninit<ViewVertex>],
+        c: &mut [MaybeUninit<u8>],
+    ) {
         self.run(first, v, c);
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512dq")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
     fn run_avx512(
         &self,
+        _: crate::cpu::Avx512,
         first: usize,
         v: &mut [MaybeUninit<ViewVertex>],
         c: &mut [MaybeUninit<u8>],
@@ -620,12 +627,30 @@ mod tests {
             });
             assert_eq!((bits(&v), &c), (bits(&v0), &c0), "fastest, runs of {run}");
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: AVX2 was just detected.
+            if let Some(cpu) = crate::cpu::Avx2::new() {
+                // SAFETY: `Avx2::new` checked every feature `run_avx2` enables.
                 let (v, c) = in_runs(&pass, total, run, |p, first, v, c| unsafe {
-                    p.run_avx2(first, v, c)
+                    p.run_avx2(cpu, first, v, c)
                 });
                 assert_eq!((bits(&v), &c), (bits(&v0), &c0), "AVX2, runs of {run}");
+            } else {
+                crate::cpu::simd_test_skipped(
+                    "AVX2",
+                    "the AVX2 vertex pass against the portable one",
+                );
+            }
+            #[cfg(target_arch = "x86_64")]
+            if let Some(cpu) = crate::cpu::Avx512::new() {
+                // SAFETY: `Avx512::new` checked every feature `run_avx512` enables.
+                let (v, c) = in_runs(&pass, total, run, |p, first, v, c| unsafe {
+                    p.run_avx512(cpu, first, v, c)
+                });
+                assert_eq!((bits(&v), &c), (bits(&v0), &c0), "AVX-512, runs of {run}");
+            } else {
+                crate::cpu::simd_test_skipped(
+                    "AVX-512",
+                    "the AVX-512 vertex pass against the portable one",
+                );
             }
         }
     }
@@ -660,8 +685,9 @@ mod tests {
     }
 
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512dq")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
     fn vertices8_avx512(
+        _: crate::cpu::Avx512,
         mv: &ModelView,
         t: &ViewTransform,
         p: &[DVec3; 8],
@@ -705,10 +731,15 @@ mod tests {
                 });
                 let (v, c) = transform_vertices8(&mv, &t, &p);
                 #[cfg(target_arch = "x86_64")]
-                if crate::raster::avx512::Avx512::new().is_some() {
-                    // SAFETY: `Avx512::new` checked the features.
-                    let (v2, c2) = unsafe { vertices8_avx512(&mv, &t, &p) };
+                if let Some(cpu) = crate::cpu::Avx512::new() {
+                    // SAFETY: `Avx512::new` checked every feature `vertices8_avx512` enables.
+                    let (v2, c2) = unsafe { vertices8_avx512(cpu, &mv, &t, &p) };
                     assert_eq!((bits(&v), c), (bits(&v2), c2), "{p:?}");
+                } else if round == 0 {
+                    crate::cpu::simd_test_skipped(
+                        "AVX-512",
+                        "eight vertices with AVX-512 against one at a time",
+                    );
                 }
                 for l in 0..8 {
                     let (w, d) = transform_vertex(&mv, &t, p[l]);

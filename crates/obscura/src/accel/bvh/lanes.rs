@@ -237,28 +237,15 @@ mod x86 {
     use super::{BvhNode, CHUNK, Frustum, Lanes, Mask, PACKET, RayPacket, WIDEN};
     use crate::accel::triangles::AxisOrder;
 
-    /// AVX-512 lanes. A value exists only on a processor with AVX-512 F and VL (and the
-    /// AVX2 they imply).
-    #[derive(Clone, Copy, Debug)]
-    pub(in crate::accel::bvh) struct Avx512 {
-        _proof: (),
-    }
-
-    impl Avx512 {
-        /// The lanes, if this processor runs them.
-        pub(in crate::accel::bvh) fn new() -> Option<Self> {
-            (is_x86_feature_detected!("avx512f")
-                && is_x86_feature_detected!("avx512vl")
-                && is_x86_feature_detected!("avx2"))
-            .then_some(Avx512 { _proof: () })
-        }
-    }
+    /// AVX-512 lanes: the crate's one AVX-512 token, whose constructor checks every
+    /// feature the functions below enable.
+    pub(in crate::accel::bvh) use crate::cpu::Avx512;
 
     impl Lanes for Avx512 {
         #[inline(always)]
         fn children(self, f: &Frustum, n: &BvhNode, t_lo: f32, t_far: f32) -> u32 {
             // SAFETY: an `Avx512` exists only when the processor has the features.
-            unsafe { children(f, n, t_lo, t_far) }
+            unsafe { children(self, f, n, t_lo, t_far) }
         }
 
         #[inline(always)]
@@ -290,7 +277,7 @@ mod x86 {
             mask: Mask,
         ) -> (Mask, f32) {
             // SAFETY: an `Avx512` exists only when the processor has the features.
-            unsafe { enter(p, n, k, t_lo, t_hi, mask) }
+            unsafe { enter(self, p, n, k, t_lo, t_hi, mask) }
         }
 
         #[inline(always)]
@@ -303,15 +290,15 @@ mod x86 {
             best: &[f64; PACKET],
         ) -> (Mask, Mask, [f64; CHUNK]) {
             // SAFETY: as above.
-            unsafe { triangle::<O>(p, tri, c, t_min, best) }
+            unsafe { triangle::<O>(self, p, tri, c, t_min, best) }
         }
     }
 
     const _: () = assert!(PACKET == 16 && CHUNK == 8);
 
-    #[target_feature(enable = "avx512f,avx512vl,avx2")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
     #[inline]
-    fn children(f: &Frustum, n: &BvhNode, t_lo: f32, t_far: f32) -> u32 {
+    fn children(_: Avx512, f: &Frustum, n: &BvhNode, t_lo: f32, t_far: f32) -> u32 {
         // SAFETY (loads): every array read is `[f32; 8]`, one 256-bit unaligned load.
         unsafe {
             let mut near = _mm256_set1_ps(t_lo);
@@ -352,9 +339,10 @@ mod x86 {
         }
     }
 
-    #[target_feature(enable = "avx512f,avx2")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
     #[inline]
     fn enter(
+        _: Avx512,
         p: &RayPacket,
         n: &BvhNode,
         k: usize,
@@ -391,9 +379,10 @@ mod x86 {
         }
     }
 
-    #[target_feature(enable = "avx512f,avx2")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
     #[inline]
     fn triangle<O: AxisOrder>(
+        _: Avx512,
         p: &RayPacket,
         tri: &[DVec3; 3],
         c: usize,
@@ -539,6 +528,13 @@ mod tests {
         let tie = tie();
         #[cfg(target_arch = "x86_64")]
         let fast = Avx512::new();
+        #[cfg(target_arch = "x86_64")]
+        if fast.is_none() {
+            crate::cpu::simd_test_skipped(
+                "AVX-512",
+                "packet lanes with AVX-512 against portable ones",
+            );
+        }
         let (mut hits, mut edges) = (0, 0);
         let (mut frustums, mut kept, mut culled) = (0, 0, 0);
         for case in 0..300 {

@@ -224,10 +224,10 @@ impl RayPacket {
     /// [`RayPacket::new`] in place, reusing this packet.
     pub fn prepare(&mut self, rays: &[(DVec3, DVec3)], scale: f64) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has AVX-512 F (checked just above), the only requirement
-            // of this function; its body is safe code.
-            unsafe { self.prepare_avx512(rays, scale) };
+        if let Some(cpu) = Avx512::new() {
+            // SAFETY: `Avx512::new` checked every feature this function enables; its
+            // body is safe code.
+            unsafe { self.prepare_avx512(cpu, rays, scale) };
             return;
         }
         self.prepare_lanes(rays, scale);
@@ -236,8 +236,8 @@ impl RayPacket {
     /// [`RayPacket::prepare_lanes`] compiled for AVX-512 (the compiler vectorizes
     /// its lane loops, divisions included, eight or sixteen lanes wide).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx2")]
-    fn prepare_avx512(&mut self, rays: &[(DVec3, DVec3)], scale: f64) {
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
+    fn prepare_avx512(&mut self, _: Avx512, rays: &[(DVec3, DVec3)], scale: f64) {
         self.prepare_lanes(rays, scale);
     }
 
@@ -477,11 +477,13 @@ impl Bvh {
                             bvh.packet_avx512::<O>(lanes, packet, ctx, t_max, stack, counters)
                         };
                     }
-                    if kernel != Kernel::Portable && std::arch::is_x86_feature_detected!("avx2") {
-                        // SAFETY: the CPU has AVX2 (checked just above), the only
-                        // requirement of this function; its body is safe code.
+                    if kernel != Kernel::Portable
+                        && let Some(cpu) = crate::cpu::Avx2::new()
+                    {
+                        // SAFETY: `Avx2::new` checked every feature this function
+                        // enables; its body is safe code.
                         return unsafe {
-                            bvh.packet_avx2::<O>(packet, ctx, t_max, stack, counters)
+                            bvh.packet_avx2::<O>(cpu, packet, ctx, t_max, stack, counters)
                         };
                     }
                 }
@@ -504,7 +506,7 @@ impl Bvh {
 
     /// [`Bvh::packet`] with AVX-512 lanes.
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512vl,avx2")]
+    #[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
     fn packet_avx512<O: AxisOrder>(
         &self,
         lanes: Avx512,
@@ -523,6 +525,7 @@ impl Bvh {
     #[target_feature(enable = "avx2")]
     fn packet_avx2<O: AxisOrder>(
         &self,
+        _: crate::cpu::Avx2,
         packet: &RayPacket,
         ctx: &PacketContext<'_>,
         t_max: f64,

@@ -269,12 +269,19 @@ impl Bvh {
             type Output = ClosestHit;
             fn run<O: AxisOrder>(self) -> ClosestHit {
                 #[cfg(target_arch = "x86_64")]
-                if self.kernel != Kernel::Portable && std::arch::is_x86_feature_detected!("avx2") {
-                    // SAFETY: the CPU has AVX2 (checked just above), the only
-                    // requirement of this function; its body is safe code.
+                if self.kernel != Kernel::Portable
+                    && let Some(cpu) = crate::cpu::Avx2::new()
+                {
+                    // SAFETY: `Avx2::new` checked every feature this function enables;
+                    // its body is safe code.
                     return unsafe {
-                        self.bvh
-                            .ordered_avx2::<O>(self.ctx, self.t_max, self.stack, self.counters)
+                        self.bvh.ordered_avx2::<O>(
+                            cpu,
+                            self.ctx,
+                            self.t_max,
+                            self.stack,
+                            self.counters,
+                        )
                     };
                 }
                 self.bvh
@@ -296,6 +303,7 @@ impl Bvh {
     #[target_feature(enable = "avx2")]
     fn ordered_avx2<O: AxisOrder>(
         &self,
+        _: crate::cpu::Avx2,
         ctx: &HitContext<'_>,
         t_max: f64,
         stack: &mut TraversalStack,

@@ -62,7 +62,7 @@ impl Kernel {
         match self {
             Kernel::Portable => true,
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => std::arch::is_x86_feature_detected!("avx2"),
+            Kernel::Avx2 => crate::cpu::Avx2::is_available(),
             #[cfg(target_arch = "x86_64")]
             Kernel::Avx512 => Avx512::new().is_some(),
             #[cfg(not(target_arch = "x86_64"))]
@@ -500,7 +500,7 @@ pub(crate) fn resolve_frame(frame: &mut Frame, t: &ViewTransform) {
     let depth = t.key_depths();
     #[cfg(target_arch = "x86_64")]
     if let Some(l) = Avx512::new() {
-        // SAFETY: `Avx512::new` checked the instructions `resolve_frame_avx512` enables.
+        // SAFETY: `Avx512::new` checked every feature `resolve_frame_avx512` enables.
         unsafe { resolve_frame_avx512(l, frame, depth) };
         return;
     }
@@ -508,7 +508,7 @@ pub(crate) fn resolve_frame(frame: &mut Frame, t: &ViewTransform) {
 }
 
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq")]
+#[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
 fn resolve_frame_avx512(l: Avx512, frame: &mut Frame, depth: DepthOfKey) {
     l.resolve_in_place(&mut frame.depth, &mut frame.ids, depth);
 }
@@ -525,6 +525,7 @@ fn draw_band_portable(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn draw_band_avx2(
+    _: crate::cpu::Avx2,
     view: &PreparedView<'_>,
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
@@ -558,14 +559,15 @@ pub(super) fn draw_band(
     match kernel {
         Kernel::Avx512 => {
             if let Some(l) = Avx512::new() {
-                // SAFETY: `Avx512::new` checked AVX-512 F, VL, BW and DQ, which imply
-                // AVX2; POPCNT, BMI1, BMI2 and LZCNT come with every AVX-512 processor.
+                // SAFETY: `Avx512::new` checked every feature `draw_band_avx512` enables.
                 return unsafe { draw_band_avx512(l, view, polygons, fill, band) };
             }
         }
-        Kernel::Avx2 if kernel.is_available() => {
-            // SAFETY: AVX2 just checked.
-            return unsafe { draw_band_avx2(view, polygons, fill, band) };
+        Kernel::Avx2 => {
+            if let Some(cpu) = crate::cpu::Avx2::new() {
+                // SAFETY: `Avx2::new` checked every feature `draw_band_avx2` enables.
+                return unsafe { draw_band_avx2(cpu, view, polygons, fill, band) };
+            }
         }
         _ => {}
     }

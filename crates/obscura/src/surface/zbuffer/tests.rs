@@ -132,10 +132,11 @@ fn assert_close(
     for stat in ["polygons", "polygons_drawn"] {
         assert_eq!(a.1.get(stat), b.1.get(stat), "{what}: {stat}");
     }
-    assert!(
-        a.1.get("pixels_tested") <= b.1.get("pixels_tested"),
-        "{what}: pixels tested"
-    );
+    let tested = |s: &Stats| {
+        s.get("pixels_tested")
+            .unwrap_or_else(|| panic!("{what}: pixels_tested missing"))
+    };
+    assert!(tested(&a.1) <= tested(&b.1), "{what}: pixels tested");
     diff.len()
 }
 
@@ -154,10 +155,17 @@ fn assert_identical(a: &(Frame, Stats), b: &(Frame, Stats), what: &str) {
     assert_eq!(counts(&a.1), counts(&b.1), "{what}: stats differ");
 }
 
+/// The kernels this processor runs; each one it lacks is reported as skipped (a
+/// failure with `OBSCURA_REQUIRE_SIMD=1`).
 fn kernels() -> Vec<Kernel> {
     [Kernel::Portable, Kernel::Avx2, Kernel::Avx512]
         .into_iter()
-        .filter(|k| k.is_available())
+        .filter(|k| {
+            if !k.is_available() {
+                crate::cpu::simd_test_skipped(&format!("{k:?}"), "the fast z-buffer's kernel");
+            }
+            k.is_available()
+        })
         .collect()
 }
 
@@ -339,7 +347,7 @@ fn hidden_blocks_of_big_polygons_are_culled_without_changing_the_picture() {
             opts.fill_rule,
             &format!("{kernel:?}"),
         );
-        let tested = |r: &(Frame, Stats)| r.1.get("pixels_tested").unwrap_or(0.0);
+        let tested = |r: &(Frame, Stats)| r.1.get("pixels_tested").expect("pixels_tested");
         assert!(
             tested(&fast) < 0.8 * tested(&reference),
             "{kernel:?}: {} of {} pixels tested",
@@ -369,13 +377,35 @@ fn big_polygons_and_phase_times_are_reported() {
     assert!(big >= 10 && big * 4 < view.polygon_count(), "{big} big");
     for threads in [1, 3] {
         for schedule in [Schedule::Whole, Schedule::Bands] {
+            let started = std::time::Instant::now();
             let (_, stats) =
                 render_scheduled(&view, &opts, Kernel::detect(), threads, schedule).unwrap();
+            let wall_ms = started.elapsed().as_secs_f64() * 1e3;
             assert_eq!(stats.get("big_polygons"), Some(big as f64), "{schedule:?}");
+            // The phases are measured inside the call and summed over bands: each is a
+            // real time, together more than nothing (hundreds of polygons were set up)
+            // and at most the call's time on each of its threads.
+            let mut total = 0.0;
             for phase in ["setup_and_small_ms", "binning_ms", "tiles_ms"] {
-                let ms = stats.get(phase).unwrap();
-                assert!((0.0..60_000.0).contains(&ms), "{phase}: {ms}");
+                let ms = stats
+                    .get(phase)
+                    .unwrap_or_else(|| panic!("{phase} missing"));
+                assert!(ms.is_finite() && ms >= 0.0, "{phase}: {ms}");
+                total += ms;
             }
+            // (Several threads run on the global pool, whatever its size.)
+            #[cfg(feature = "parallel")]
+            let workers = if threads > 1 {
+                rayon::current_num_threads()
+            } else {
+                1
+            };
+            #[cfg(not(feature = "parallel"))]
+            let workers = 1;
+            assert!(
+                total > 0.0 && total <= wall_ms * workers as f64,
+                "{schedule:?}, {threads} threads: phases {total} ms, call {wall_ms} ms"
+            );
         }
     }
 }
