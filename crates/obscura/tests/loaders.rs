@@ -687,6 +687,10 @@ fn stl_errors_name_the_facet() {
     assert_element(&load_err(&p), &p, "facet 5", "truncated");
     // Shorter than the header.
     let p = dir.write("header.stl", &binary_stl(b"cube", &tris)[..40]);
+    assert_element(&load_err(&p), &p, "header", "84-byte header");
+    let mut short = binary_stl(b"cube", &tris)[..40].to_vec();
+    short[20] = 0;
+    let p = dir.write("header0.stl", short);
     assert_element(&load_err(&p), &p, "header", "truncated");
     // A binary file starting with "solid" that is truncated is still reported as binary.
     let p = dir.write(
@@ -709,12 +713,34 @@ fn stl_errors_name_the_facet() {
         .iter()
         .position(|t| t.contains(&v(1., 0., 0.)))
         .unwrap();
-    let p = dir.write("overflow.stl", text);
-    assert_element(&load_err(&p), &p, &format!("facet {first_with}"), "finite");
-    // A malformed ASCII facet.
+    let corner = tris[first_with]
+        .iter()
+        .position(|&p| p == v(1., 0., 0.))
+        .unwrap();
+    let line = text.lines().position(|l| l.contains("1e39")).unwrap() + 1;
+    let p = dir.write("overflow.stl", &text);
+    assert_at_line(
+        &load_err(&p),
+        &p,
+        line,
+        &format!("facet {first_with}: vertex {corner}: coordinate 1e39 is beyond"),
+    );
+    let p = dir.write("infinite.stl", text.replace("1e39", "1e400"));
+    assert_at_line(
+        &load_err(&p),
+        &p,
+        line,
+        &format!("facet {first_with}: vertex {corner} has a non-finite coordinate"),
+    );
+    // A malformed ASCII facet (line 3: the first "outer loop").
     let text = ascii_stl("x", &tris, "\n").replacen("outer loop", "outer lop", 3);
     let p = dir.write("malformed.stl", text);
-    assert_element(&load_err(&p), &p, "facet 0", "outer");
+    assert_at_line(
+        &load_err(&p),
+        &p,
+        3,
+        "facet 0: expected \"outer loop\", found \"outer lop\"",
+    );
 }
 
 #[test]
@@ -932,17 +958,17 @@ fn ply_errors_name_element_and_line() {
         "noz.ply",
         "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n",
     );
-    assert_element(&load_err(&p), &p, "vertex", "no property z");
+    assert_at_line(&load_err(&p), &p, 3, "vertex element has no property z");
     let p = dir.write(
         "nolist.ply",
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int corners\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
     );
-    assert_element(&load_err(&p), &p, "face", "vertex_indices");
+    assert_at_line(&load_err(&p), &p, 7, "face element has no vertex_indices");
     let p = dir.write(
         "floatlist.ply",
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar float vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
     );
-    assert_at_line(&load_err(&p), &p, 13, "floating-point");
+    assert_at_line(&load_err(&p), &p, 8, "floating-point");
 }
 
 // ---------------------------------------------------------------------------------
@@ -2227,12 +2253,17 @@ fn ascii_stl_with_several_solids_loads_them_all() {
         .position(|t| t.contains(&v(1., 1., 1.)))
         .unwrap();
     assert!(at >= 2, "the first (1, 1, 1) is in the second solid");
+    let line = bad
+        .lines()
+        .position(|l| l.contains("vertex 1 x 1"))
+        .unwrap()
+        + 1;
     let p = dir.write("bad.stl", bad);
-    assert_element(
+    assert_at_line(
         &load_err(&p),
         &p,
-        &format!("solid 1 (\"second\") facet {at}"),
-        "",
+        line,
+        &format!("solid 1 (\"second\") facet {at}: \"x\" is not a number"),
     );
     // Text after the last endsolid that is not a solid is a warning.
     let s = load(&dir.write(
@@ -2255,10 +2286,10 @@ fn ply_faces_with_two_index_lists_are_refused() {
          element face 1\nproperty list uchar int vertex_indices\nproperty list uchar int vertex_index\nend_header\n\
          0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2 3 1 3 2\n",
     );
-    assert_element(
+    assert_at_line(
         &load_err(&p),
         &p,
-        "face",
+        9,
         "both a vertex_indices and a vertex_index",
     );
 }
