@@ -311,10 +311,7 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
             "element" => {
                 let (Some(name), Some(count), None) = (words.next(), words.next(), words.next())
                 else {
-                    return Err(err(
-                        line_no,
-                        "expected \"element NAME COUNT\"".into(),
-                    ));
+                    return Err(err(line_no, "expected \"element NAME COUNT\"".into()));
                 };
                 let count = count.parse::<u64>().map_err(|_| {
                     err(
@@ -342,10 +339,7 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
             }
             "property" => {
                 let Some(element) = elements.last_mut() else {
-                    return Err(err(
-                        line_no,
-                        "a property before any element".into(),
-                    ));
+                    return Err(err(line_no, "a property before any element".into()));
                 };
                 let words: Vec<&str> = words.collect();
                 let scalar = |w: &str| {
@@ -413,10 +407,7 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header> {
         }
     }
     let Some(encoding) = encoding else {
-        return Err(err(
-            line_no,
-            "no \"format\" line before end_header".into(),
-        ));
+        return Err(err(line_no, "no \"format\" line before end_header".into()));
     };
     Ok(Header {
         encoding,
@@ -446,7 +437,9 @@ fn assign_roles(path: &Path, elements: &mut [ElementDef]) -> Result<()> {
                     if p.list.is_some() {
                         return Err(err(
                             p.line,
-                            format!("property {axis} of the vertex element is a list, expected a number"),
+                            format!(
+                                "property {axis} of the vertex element is a list, expected a number"
+                            ),
                         ));
                     }
                     p.role = Role::Axis(k);
@@ -469,10 +462,7 @@ fn assign_roles(path: &Path, elements: &mut [ElementDef]) -> Result<()> {
                     ));
                 }
                 if p.list.is_none() {
-                    return Err(err(
-                        p.line,
-                        format!("property {} is not a list", p.name),
-                    ));
+                    return Err(err(p.line, format!("property {} is not a list", p.name)));
                 }
                 if !p.ty.is_integer() {
                     return Err(err(
@@ -616,10 +606,9 @@ impl Body<'_> {
             match p.list {
                 None => {
                     let tok = next(&format!("property {}", p.name)).map_err(fail)?;
-                    let v = p
-                        .ty
-                        .parse_text(tok)
-                        .map_err(|m| fail(format!("property {}: {m}", p.name)))?;
+                    let v =
+                        p.ty.parse_text(tok)
+                            .map_err(|m| fail(format!("property {}: {m}", p.name)))?;
                     if let Role::Axis(k) = p.role {
                         values.xyz[k] = v;
                     }
@@ -634,10 +623,9 @@ impl Body<'_> {
                     }
                     for _ in 0..n as u64 {
                         let tok = next(&format!("an item of list {}", p.name)).map_err(fail)?;
-                        let v = p
-                            .ty
-                            .parse_text(tok)
-                            .map_err(|m| fail(format!("list {}: {m}", p.name)))?;
+                        let v =
+                            p.ty.parse_text(tok)
+                                .map_err(|m| fail(format!("list {}: {m}", p.name)))?;
                         if p.role == Role::Corners {
                             corners.push(v as i64);
                         }

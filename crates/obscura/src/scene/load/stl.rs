@@ -274,7 +274,10 @@ fn rest_after_keyword(line: &[u8]) -> String {
 fn quoted(tok: &[u8]) -> String {
     let shown = &tok[..tok.len().min(40)];
     let more = if tok.len() > 40 { "..." } else { "" };
-    format!("\"{}{more}\"", String::from_utf8_lossy(shown).escape_debug())
+    format!(
+        "\"{}{more}\"",
+        String::from_utf8_lossy(shown).escape_debug()
+    )
 }
 
 fn load_ascii(path: &Path, text: &[u8]) -> Result<Loaded> {
