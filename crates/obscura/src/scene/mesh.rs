@@ -41,6 +41,10 @@ pub struct LoadReport {
     /// scene file's report names the mesh files its warnings come from); a warning
     /// about another file (a material library) names it.
     pub messages: Vec<String>,
+    /// How many of `degenerate_faces` and `nonplanar_faces` a message already reports
+    /// along with the file they come from ([`LoadReport::merge_from_file`]):
+    /// [`LoadReport::warnings`] leaves them out of its own count lines.
+    named_in_messages: [usize; 2],
 }
 
 impl LoadReport {
@@ -50,23 +54,38 @@ impl LoadReport {
         self.nonplanar_faces += other.nonplanar_faces;
         self.concave_faces += other.concave_faces;
         self.messages.extend(other.messages.iter().cloned());
+        self.named_in_messages[0] += other.named_in_messages[0];
+        self.named_in_messages[1] += other.named_in_messages[1];
+    }
+
+    /// Adds the report of another file (a mesh placed by a scene file): its counts
+    /// are added, and each of its warnings, counts included, becomes a message that
+    /// starts with `file`, so that the user reads which file dropped the faces rather
+    /// than the scene file's name alone.
+    pub fn merge_from_file(&mut self, other: &LoadReport, file: &std::path::Path) {
+        self.degenerate_faces += other.degenerate_faces;
+        self.nonplanar_faces += other.nonplanar_faces;
+        self.concave_faces += other.concave_faces;
+        self.named_in_messages[0] += other.degenerate_faces;
+        self.named_in_messages[1] += other.nonplanar_faces;
+        let file = file.display();
+        self.messages
+            .extend(other.warnings().into_iter().map(|w| format!("{file}: {w}")));
     }
 
     /// One line per kind of warning, for the user; empty when there is nothing to say.
     #[must_use]
     pub fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
-        if self.degenerate_faces > 0 {
+        let degenerate = self.degenerate_faces - self.named_in_messages[0];
+        if degenerate > 0 {
             w.push(format!(
-                "{} degenerate face(s) (zero area or < 3 distinct vertices) dropped",
-                self.degenerate_faces
+                "{degenerate} degenerate face(s) (zero area or < 3 distinct vertices) dropped",
             ));
         }
-        if self.nonplanar_faces > 0 {
-            w.push(format!(
-                "{} non-planar face(s) triangulated",
-                self.nonplanar_faces
-            ));
+        let nonplanar = self.nonplanar_faces - self.named_in_messages[1];
+        if nonplanar > 0 {
+            w.push(format!("{nonplanar} non-planar face(s) triangulated"));
         }
         w.extend(self.messages.iter().cloned());
         w

@@ -26,6 +26,11 @@
 //! multi-material mesh: one vertex array, an index range per material) share its
 //! vertices: the accessor is decoded once per mesh.
 //!
+//! Container: the content decides, not the extension. A file starting with the GLB
+//! magic `glTF` is a GLB (also when named `.gltf`); one starting with `{` (after an
+//! optional byte-order mark and white space) is JSON (also when named `.glb`); any
+//! other start is an error naming the first bytes in hex and what was expected.
+//!
 //! Buffers: the GLB binary chunk, base64 `data:` URIs, and files (relative to the glTF,
 //! or `file:` URIs); remote (`http:`, `https:`...) URIs are refused. A UTF-8 byte-order
 //! mark before the JSON is skipped, as the specification allows.
@@ -39,7 +44,8 @@
 //! Nodes whose world transform is singular (scale 0, used to hide nodes) and
 //! primitives that are points or lines are skipped, with one warning for each kind.
 //!
-//! Complexity: O(file size + nodes). Source: the Khronos glTF 2.0 specification
+//! Complexity: O(file size + nodes); a mesh's bounds are found once, however many
+//! nodes place it. Source: the Khronos glTF 2.0 specification
 //! (sections 3.5 Nodes and hierarchy, 3.6 Binary data storage, 3.7.2 Meshes).
 
 use std::collections::HashMap;
@@ -61,6 +67,7 @@ pub const MAX_VIEWLESS_COUNT: usize = 1 << 24;
 
 /// Loads a glTF or GLB file from its bytes (`path` names it and locates its buffers).
 pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
+    check_container(path, bytes)?;
     check_glb_header(path, bytes)?;
     let element = if bytes.starts_with(b"glTF") {
         "GLB container"
@@ -155,6 +162,8 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
 
     let mut meshes: Vec<Option<Arc<Mesh>>> = vec![None; doc.meshes().len()];
     let mut colors: Vec<[f32; 3]> = vec![[0.8; 3]; doc.meshes().len()];
+    // A mesh's bounds, found once however many nodes place it.
+    let mut mesh_bounds: Vec<Option<crate::geom::Aabb>> = vec![None; doc.meshes().len()];
     let mut stack: Vec<(gl::Node<'_>, DMat4)> = Vec::new();
     for root in roots {
         stack.push((root, DMat4::IDENTITY));
@@ -204,7 +213,8 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
                     .add(|| format!("node {} ({node_name})", node.index()));
                 continue;
             }
-            if let Some(why) = world_out_of_range(&shared, &world) {
+            let bounds = *mesh_bounds[m].get_or_insert_with(|| shared.bounds());
+            if let Some(why) = world_out_of_range(&shared, bounds, &world) {
                 return Err(Error::format(
                     path,
                     format!("node {} ({node_name})", node.index()),
@@ -275,8 +285,7 @@ fn first_in_cycle(parent: &[Option<usize>]) -> Option<usize> {
 
 /// Where a mesh placed by `world` leaves the accepted coordinate range, if it does: the
 /// message names the vertex (the scene would refuse it without knowing the node).
-fn world_out_of_range(mesh: &Mesh, world: &DMat4) -> Option<String> {
-    let bounds = mesh.bounds();
+fn world_out_of_range(mesh: &Mesh, bounds: crate::geom::Aabb, world: &DMat4) -> Option<String> {
     if bounds.is_empty() {
         return None;
     }
@@ -337,6 +346,52 @@ fn local_transform(node: &gl::Node<'_>) -> std::result::Result<DMat4, String> {
     } else {
         Err("the transform is not finite".into())
     }
+}
+
+/// The GLB magic number: the bytes `glTF` (0x46546C67 little-endian).
+const GLB_MAGIC: &[u8; 4] = b"glTF";
+
+/// Bytes shown in hex, for messages about binary content (never the raw bytes).
+fn hex(bytes: &[u8]) -> String {
+    let hex: Vec<String> = bytes.iter().map(|b| format!("{b:02X}")).collect();
+    hex.join(" ")
+}
+
+/// Refuses a file that is neither a GLB container nor JSON before either parser sees
+/// it, naming what it starts with: a `.glb` must start with the magic `glTF` (a JSON
+/// glTF named `.glb` is read as JSON), and any other content must be JSON (an object,
+/// `{`, after an optional byte-order mark and white space). A `.gltf` holding a GLB
+/// container is read as GLB: the content decides, not the extension.
+fn check_container(path: &Path, bytes: &[u8]) -> Result<()> {
+    if bytes.starts_with(GLB_MAGIC) {
+        return Ok(());
+    }
+    if strip_bom(bytes).trim_ascii_start().starts_with(b"{") {
+        return Ok(());
+    }
+    let head = &bytes[..bytes.len().min(4)];
+    let glb = super::extension(path).as_deref() == Some("glb");
+    let (element, expected) = if glb {
+        (
+            "GLB header",
+            format!(
+                "the magic number is {}, expected {} (\"glTF\"): not a binary glTF file",
+                hex(head),
+                hex(GLB_MAGIC)
+            ),
+        )
+    } else {
+        (
+            "document",
+            format!(
+                "starts with the bytes {}: neither a GLB container (magic {}, \"glTF\") nor \
+                 a JSON glTF (an object starting with '{{')",
+                hex(head),
+                hex(GLB_MAGIC)
+            ),
+        )
+    };
+    Err(Error::format(path, element, expected))
 }
 
 /// Refuses GLB headers the `gltf` crate would mishandle (a length below the header's

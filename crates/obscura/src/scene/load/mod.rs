@@ -259,6 +259,31 @@ impl Tally {
     }
 }
 
+/// The lines of a text, to find the line of many byte offsets in O(log lines) each
+/// ([`line_of_offset`] counts from the start every time).
+#[derive(Debug)]
+pub(crate) struct LineIndex {
+    /// Byte offset of the start of each line after the first.
+    starts: Vec<usize>,
+}
+
+impl LineIndex {
+    pub(crate) fn new(text: &str) -> Self {
+        let starts = text
+            .bytes()
+            .enumerate()
+            .filter(|&(_, b)| b == b'\n')
+            .map(|(i, _)| i + 1)
+            .collect();
+        LineIndex { starts }
+    }
+
+    /// The 1-based line of a byte offset (as [`line_of_offset`]).
+    pub(crate) fn line(&self, offset: usize) -> usize {
+        self.starts.partition_point(|&s| s <= offset) + 1
+    }
+}
+
 /// The 1-based line of a byte offset in a text.
 pub(crate) fn line_of_offset(text: &str, offset: usize) -> usize {
     let end = offset.min(text.len());
@@ -267,4 +292,23 @@ pub(crate) fn line_of_offset(text: &str, offset: usize) -> usize {
         .filter(|&&b| b == b'\n')
         .count()
         + 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_index_agrees_with_counting() {
+        for text in ["", "a", "\n", "a\nb", "a\n\nbc\n", "\r\nx\r\n"] {
+            let index = LineIndex::new(text);
+            for offset in 0..=text.len() + 1 {
+                assert_eq!(
+                    index.line(offset),
+                    line_of_offset(text, offset),
+                    "{text:?} at {offset}"
+                );
+            }
+        }
+    }
 }

@@ -389,6 +389,9 @@ fn build(path: &Path, p: Parsed) -> Result<Loaded> {
     // mapped `v`, so no O(vertices) reset is needed per object.
     let mut stamp = vec![u32::MAX; p.positions.len()];
     let mut local = vec![0u32; p.positions.len()];
+    // The same for materials: `material_stamp[m]` says which object last added `m`
+    // (resetting a table of every material per object was O(objects x materials)).
+    let mut material_stamp = vec![u32::MAX; p.material_names.len()];
     let mut local_material = vec![NO_MATERIAL; p.material_names.len()];
     let mut face = Vec::new();
     let face_total = p.face_lines.len();
@@ -400,7 +403,6 @@ fn build(path: &Path, p: Parsed) -> Result<Loaded> {
         let faces = run.first_face..end;
         let corners = p.face_starts[end] - p.face_starts[run.first_face];
         let mut b = MeshBuilder::with_capacity(corners.min(p.positions.len()), faces.len());
-        local_material.fill(NO_MATERIAL);
         for f in faces {
             face.clear();
             for &v in &p.face_indices[p.face_starts[f]..p.face_starts[f + 1]] {
@@ -414,7 +416,8 @@ fn build(path: &Path, p: Parsed) -> Result<Loaded> {
             let m = p.face_materials[f];
             let material = match colors.get(m as usize).copied().flatten() {
                 Some(color) => {
-                    if local_material[m as usize] == NO_MATERIAL {
+                    if material_stamp[m as usize] != r as u32 {
+                        material_stamp[m as usize] = r as u32;
                         local_material[m as usize] = b.push_material(Material {
                             name: p.material_names[m as usize].clone(),
                             color,
@@ -443,7 +446,13 @@ fn resolve_materials(path: &Path, p: &Parsed, warnings: &mut Vec<String>) -> Vec
     }
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut library: HashMap<String, [f32; 3]> = HashMap::new();
+    // A library named again (on another `mtllib` line) is read once: its materials
+    // are already in, first definition first.
+    let mut read: std::collections::HashSet<&str> = std::collections::HashSet::new();
     for (name, line) in &p.libraries {
+        if !read.insert(name.as_str()) {
+            continue;
+        }
         let lib_path = dir.join(name);
         match mtl::load(&lib_path, warnings) {
             Ok(materials) => {

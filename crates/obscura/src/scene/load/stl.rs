@@ -1,33 +1,42 @@
-//! STL (stereolithography) triangle files, binary and ASCII, read with `stl_io`.
+//! STL (stereolithography) triangle files, binary and ASCII, read here in one pass.
 //!
-//! Input: the bytes of a `.stl` file. Output: one object (named after the ASCII
-//! `solid` name, or the file) whose faces are the facets in file order; vertices are
-//! welded by exact position so that edge adjacency (closed-mesh detection) sees shared
-//! edges. The stored facet normal is ignored: the winding (counter-clockwise seen from
-//! outside, as the format requires) gives the front side.
+//! Input: the bytes of a `.stl` file. Output: one object per solid (named after the
+//! ASCII `solid` name, or the file) whose faces are the facets in file order; vertices
+//! are welded by exact position so that edge adjacency (closed-mesh detection) sees
+//! shared edges. The stored facet normal is ignored: the winding (counter-clockwise
+//! seen from outside, as the format requires) gives the front side.
 //!
-//! Format detection: a file is binary when its size is exactly `84 + 50 n`, `n` being
-//! the facet count in bytes 80..84, even when its header starts with `solid` (many
-//! exporters write that); otherwise it is ASCII when it starts with `solid` (after an
-//! optional UTF-8 byte-order mark and white space) and has no NUL byte in its first
-//! kilobyte, else binary.
+//! Format detection, in this order:
+//! 1. binary when the size is exactly `84 + 50 n`, `n` being the facet count in bytes
+//!    80..84, even when the header starts with `solid` (many exporters write that);
+//! 2. ASCII when the text starts with `solid` in any case (`SOLID`, `Solid`), after an
+//!    optional UTF-8 byte-order mark and white space, and the first kilobyte holds no
+//!    NUL byte;
+//! 3. binary when the first kilobyte holds a NUL byte (a binary file whose size does
+//!    not match its count: truncated, an error, or with trailing bytes, a warning);
+//! 4. otherwise an error saying what either form must look like, and what the file
+//!    starts with.
 //!
-//! An ASCII file holding several `solid ... endsolid` blocks (some exporters write one
-//! per part) yields one object per solid, in file order; text after the last
-//! `endsolid` that does not start another solid is ignored with a warning.
+//! ASCII grammar (keywords in any case, one statement per line, any white space):
+//! `solid [name]`, then for each facet `facet [normal nx ny nz]`, `outer loop`, three
+//! (or more: an n-gon is one face) `vertex x y z`, `endloop`, `endfacet`; then
+//! `endsolid [name]`. A file may hold several solids (some exporters write one per
+//! part): one object each, in file order, face ids counted across the file. Text
+//! after the last `endsolid` that does not start another solid is ignored with a
+//! warning; a missing final `endsolid` is accepted.
 //!
-//! Errors (naming the file and the 0-based facet, counted across the file; with several
-//! solids, the solid too): a non-finite coordinate, a coordinate beyond
-//! [`MAX_COORDINATE`](crate::scene::MAX_COORDINATE), a malformed ASCII facet, a binary
-//! file shorter than its header announces (truncated). Trailing bytes after the
-//! announced facets are a warning. Limitations: ASCII errors name the facet, not the
-//! line (`stl_io` does not say where it stopped); keywords must be lower case.
+//! Errors: ASCII ones name `file:line`, the facet (0-based, counted across the file)
+//! and, from the second solid on, the solid; binary ones name the facet. A non-finite
+//! coordinate, a coordinate beyond
+//! [`MAX_COORDINATE`](crate::scene::MAX_COORDINATE), an unexpected statement (naming
+//! what was expected and what was found), a file ending inside a facet, a binary file
+//! shorter than its header announces (truncated). Trailing bytes after the announced
+//! binary facets are a warning.
 //!
-//! Complexity: O(facets) with one hash lookup per corner. Source: the 3D Systems
-//! StereoLithography Interface Specification (1989).
+//! Complexity: O(file size), one hash lookup per corner, however many solids the file
+//! holds. Source: the 3D Systems StereoLithography Interface Specification (1989).
 
 use std::collections::HashMap;
-use std::io::Cursor;
 use std::path::Path;
 
 use glam::DVec3;
@@ -40,197 +49,422 @@ use crate::{Error, Result};
 const BINARY_HEADER: u64 = 84;
 /// Size of one binary facet: normal and three vertices (12 `f32`) and 2 attribute bytes.
 const BINARY_FACET: u64 = 50;
+/// How far a NUL byte is looked for to tell a binary file from text.
+const SNIFF: usize = 1024;
 
 /// Loads an STL file from its bytes (`path` names it in messages).
-pub fn load(path: &Path, mut bytes: Vec<u8>) -> Result<Loaded> {
-    let mut loaded = Loaded::default();
-    if is_binary(&bytes) {
-        if (bytes.len() as u64) < BINARY_HEADER {
-            return Err(Error::format(
-                path,
-                "header",
-                format!(
-                    "truncated: {} bytes, but a binary STL has an 84-byte header (and an ASCII one starts with \"solid\")",
-                    bytes.len()
-                ),
-            ));
-        }
-        let n = u64::from(u32::from_le_bytes([
-            bytes[80], bytes[81], bytes[82], bytes[83],
-        ]));
-        let expected = BINARY_HEADER + BINARY_FACET * n;
-        let len = bytes.len() as u64;
-        if len < expected {
-            return Err(Error::format(
-                path,
-                format!("facet {}", (len - BINARY_HEADER) / BINARY_FACET),
-                format!(
-                    "truncated: the header announces {n} facets ({expected} bytes) but the file has {len} bytes"
-                ),
-            ));
-        }
-        if len > expected {
-            loaded.report.messages.push(format!(
-                "{} bytes after the {n} facets the header announces were ignored",
-                len - expected
-            ));
-        }
-        // stl_io decides ASCII vs binary by a leading "solid "; make sure it reads
-        // this header as binary.
-        bytes[0] = 0;
-        let object = read_solid(path, bytes, file_stem(path), n as usize, "", 0)?;
-        finish(object, &mut loaded);
-        return Ok(loaded);
+pub fn load(path: &Path, bytes: Vec<u8>) -> Result<Loaded> {
+    match kind(&bytes) {
+        Kind::Binary => load_binary(path, &bytes),
+        Kind::Ascii => load_ascii(path, strip_bom(&bytes)),
+        Kind::Neither => Err(Error::format(
+            path,
+            "header",
+            format!(
+                "not an STL file: an ASCII STL starts with \"solid\", a binary one has an \
+                 84-byte header and 50 bytes per facet ({}), but this file {}",
+                binary_size_note(&bytes),
+                starts_with(&bytes)
+            ),
+        )),
     }
-    let text = strip_bom(&bytes);
-    let solids = split_solids(text);
-    let several = solids.len() > 1;
-    for (k, solid) in solids.iter().enumerate() {
-        // stl_io wants the first line to be "solid NAME"; normalise it ("solid" alone,
-        // leading blanks) and keep the name.
-        let start = solid
-            .iter()
-            .position(|b| !b.is_ascii_whitespace())
-            .unwrap_or(0);
-        let eol = solid[start..]
+}
+
+/// What the detection rule of the module doc decides.
+#[derive(Debug, PartialEq, Eq)]
+enum Kind {
+    Binary,
+    Ascii,
+    Neither,
+}
+
+fn kind(bytes: &[u8]) -> Kind {
+    if announced_size(bytes).is_some_and(|size| size == bytes.len() as u64) {
+        return Kind::Binary;
+    }
+    let has_nul = bytes[..bytes.len().min(SNIFF)].contains(&0);
+    let text = strip_bom(bytes).trim_ascii_start();
+    let says_solid = text.len() >= 5
+        && text[..5].eq_ignore_ascii_case(b"solid")
+        && text.get(5).is_none_or(u8::is_ascii_whitespace);
+    if says_solid && !has_nul {
+        Kind::Ascii
+    } else if has_nul {
+        Kind::Binary
+    } else {
+        Kind::Neither
+    }
+}
+
+/// The size a binary file of this header has: `84 + 50 n`.
+fn announced_size(bytes: &[u8]) -> Option<u64> {
+    let n = bytes.get(80..84)?;
+    Some(BINARY_HEADER + BINARY_FACET * u64::from(u32::from_le_bytes([n[0], n[1], n[2], n[3]])))
+}
+
+/// What the size rule says of a file that is neither form.
+fn binary_size_note(bytes: &[u8]) -> String {
+    match announced_size(bytes) {
+        Some(size) => format!(
+            "bytes 80..84 would announce {} facets, {size} bytes, the file has {}",
+            (size - BINARY_HEADER) / BINARY_FACET,
+            bytes.len()
+        ),
+        None => format!("the file has {} bytes", bytes.len()),
+    }
+}
+
+/// "starts with ..." for a message: printable ASCII quoted, anything else in hex.
+fn starts_with(bytes: &[u8]) -> String {
+    let head = strip_bom(bytes).trim_ascii_start();
+    let head = &head[..head.len().min(16)];
+    if head.is_empty() {
+        "holds only white space".into()
+    } else if head.iter().all(|b| b.is_ascii_graphic() || *b == b' ') {
+        format!("starts with \"{}\"", String::from_utf8_lossy(head))
+    } else {
+        let hex: Vec<String> = head.iter().map(|b| format!("{b:02X}")).collect();
+        format!("starts with the bytes {}", hex.join(" "))
+    }
+}
+
+/// Welds corners by exact position into one solid's builder.
+struct Solid {
+    name: String,
+    builder: MeshBuilder,
+    weld: HashMap<[u64; 3], u32>,
+}
+
+impl Solid {
+    fn new(name: String) -> Self {
+        Solid {
+            name,
+            builder: MeshBuilder::new(),
+            weld: HashMap::new(),
+        }
+    }
+
+    /// The vertex id of a position (checked finite and in range by the caller).
+    fn vertex(&mut self, p: [f64; 3]) -> u32 {
+        // +0.0 turns -0.0 into +0.0 so both weld together.
+        let key = p.map(|x| (x + 0.0).to_bits());
+        let b = &mut self.builder;
+        *self
+            .weld
+            .entry(key)
+            .or_insert_with(|| b.push_position(DVec3::from_array(p)))
+    }
+
+    fn finish(self, loaded: &mut Loaded) {
+        let color = palette_color(loaded.objects.len());
+        let object = finish_object(self.name, self.builder, color, &mut loaded.report);
+        loaded.objects.push(object);
+    }
+}
+
+/// Why a vertex cannot be used, if it cannot.
+fn bad_vertex(c: usize, p: [f64; 3]) -> Option<String> {
+    if let Some(bad) = p.iter().find(|x| !x.is_finite()) {
+        return Some(format!("vertex {c} has a non-finite coordinate ({bad})"));
+    }
+    coordinate_out_of_range(p).map(|m| format!("vertex {c}: {m}"))
+}
+
+fn load_binary(path: &Path, bytes: &[u8]) -> Result<Loaded> {
+    let len = bytes.len() as u64;
+    let Some(expected) = announced_size(bytes) else {
+        return Err(Error::format(
+            path,
+            "header",
+            format!(
+                "truncated: {len} bytes, but a binary STL has an 84-byte header (and an \
+                 ASCII one starts with \"solid\")"
+            ),
+        ));
+    };
+    let n = (expected - BINARY_HEADER) / BINARY_FACET;
+    let mut loaded = Loaded::default();
+    if len < expected {
+        return Err(Error::format(
+            path,
+            format!("facet {}", (len - BINARY_HEADER) / BINARY_FACET),
+            format!(
+                "truncated: the header announces {n} facets ({expected} bytes) but the file \
+                 has {len} bytes"
+            ),
+        ));
+    }
+    if len > expected {
+        loaded.report.messages.push(format!(
+            "{} bytes after the {n} facets the header announces were ignored",
+            len - expected
+        ));
+    }
+    let mut solid = Solid::new(file_stem(path));
+    // `n` facets fit in the file, so this reserves by the file's size.
+    solid.builder = MeshBuilder::with_capacity(n as usize / 2, n as usize);
+    solid.weld.reserve(n as usize / 2);
+    let facets = bytes[BINARY_HEADER as usize..expected as usize].chunks_exact(50);
+    for (k, facet) in facets.enumerate() {
+        let f = |i: usize| {
+            let at = 12 + 4 * i;
+            f64::from(f32::from_le_bytes([
+                facet[at],
+                facet[at + 1],
+                facet[at + 2],
+                facet[at + 3],
+            ]))
+        };
+        let mut tri = [0u32; 3];
+        for (c, id) in tri.iter_mut().enumerate() {
+            let p = [f(3 * c), f(3 * c + 1), f(3 * c + 2)];
+            if let Some(m) = bad_vertex(c, p) {
+                return Err(Error::format(path, format!("facet {k}"), m));
+            }
+            *id = solid.vertex(p);
+        }
+        solid
+            .builder
+            .push_face(&tri, None)
+            .map_err(|e| Error::format(path, format!("facet {k}"), e.to_string()))?;
+    }
+    solid.finish(&mut loaded);
+    Ok(loaded)
+}
+
+/// Where the ASCII reader is in the grammar.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum State {
+    /// Before a `solid` (or after an `endsolid`).
+    Outside,
+    /// In a solid, between facets.
+    Solid,
+    /// After `facet`, before `outer loop`.
+    Facet,
+    /// Between `outer loop` and `endloop`.
+    Loop,
+    /// After `endloop`, before `endfacet`.
+    LoopDone,
+}
+
+impl State {
+    /// What may come next, for messages.
+    fn expected(self) -> &'static str {
+        match self {
+            State::Outside => "\"solid\"",
+            State::Solid => "\"facet\" or \"endsolid\"",
+            State::Facet => "\"outer loop\"",
+            State::Loop => "\"vertex x y z\" or \"endloop\"",
+            State::LoopDone => "\"endfacet\"",
+        }
+    }
+}
+
+/// The text of a line after its first word, trimmed (a solid's name).
+fn rest_after_keyword(line: &[u8]) -> String {
+    let line = line.trim_ascii_start();
+    let end = line
+        .iter()
+        .position(u8::is_ascii_whitespace)
+        .unwrap_or(line.len());
+    String::from_utf8_lossy(line[end..].trim_ascii()).into_owned()
+}
+
+/// A token quoted for a message (at most 40 bytes of it).
+fn quoted(tok: &[u8]) -> String {
+    let shown = &tok[..tok.len().min(40)];
+    let more = if tok.len() > 40 { "..." } else { "" };
+    format!(
+        "\"{}{more}\"",
+        String::from_utf8_lossy(shown).escape_debug()
+    )
+}
+
+fn load_ascii(path: &Path, text: &[u8]) -> Result<Loaded> {
+    let mut loaded = Loaded::default();
+    let mut state = State::Outside;
+    let mut solid: Option<Solid> = None;
+    // The solid being read (0-based) and its name, for messages.
+    let mut solid_index = 0usize;
+    let mut solid_name = String::new();
+    let mut solids_seen = 0usize;
+    // Facets read so far in the file (face ids count across solids).
+    let mut facet = 0usize;
+    let mut corners: Vec<u32> = Vec::with_capacity(3);
+    let mut offset = 0usize;
+    let mut line_no = 0usize;
+    while offset < text.len() {
+        let end = text[offset..]
             .iter()
             .position(|&b| b == b'\n')
-            .map_or(solid.len(), |i| start + i);
-        let first = String::from_utf8_lossy(&solid[start..eol]);
-        let solid_name = first.trim().strip_prefix("solid").unwrap_or("").trim();
-        let name = if solid_name.is_empty() {
-            file_stem(path)
-        } else {
-            solid_name.to_string()
+            .map_or(text.len(), |i| offset + i);
+        let line = &text[offset..end];
+        let line_start = offset;
+        offset = end + 1;
+        line_no += 1;
+        let mut tokens = line
+            .split(u8::is_ascii_whitespace)
+            .filter(|t| !t.is_empty());
+        let Some(keyword) = tokens.next() else {
+            continue;
         };
-        let mut fixed = b"solid obscura\n".to_vec();
-        fixed.extend_from_slice(&solid[(eol + 1).min(solid.len())..]);
-        let hint = fixed.len() / 200;
-        let prefix = if several {
-            format!("solid {k} (\"{name}\") ")
+        let is = |word: &[u8]| keyword.eq_ignore_ascii_case(word);
+        let what = || {
+            let at = if solid_index > 0 {
+                format!("solid {solid_index} (\"{solid_name}\") ")
+            } else {
+                String::new()
+            };
+            if matches!(state, State::Outside | State::Solid) {
+                at.trim_end().to_string()
+            } else {
+                format!("{at}facet {facet}")
+            }
+        };
+        let fail = |message: String| {
+            let what = what();
+            let message = if what.is_empty() {
+                message
+            } else {
+                format!("{what}: {message}")
+            };
+            Error::parse(path, line_no, message)
+        };
+        let unexpected = || {
+            fail(format!(
+                "expected {}, found {}",
+                state.expected(),
+                quoted(line.trim_ascii())
+            ))
+        };
+        match state {
+            State::Outside => {
+                if !is(b"solid") {
+                    // Only after a first solid: detection saw "solid" at the start.
+                    let rest = &text[line_start..];
+                    loaded.report.messages.push(format!(
+                        "line {line_no}: {} bytes after the last endsolid that do not start \
+                         another solid were ignored",
+                        rest.len()
+                    ));
+                    break;
+                }
+                let name = rest_after_keyword(line);
+                let name = if name.is_empty() {
+                    file_stem(path)
+                } else {
+                    name
+                };
+                solid_index = solids_seen;
+                solids_seen += 1;
+                solid_name.clone_from(&name);
+                solid = Some(Solid::new(name));
+                state = State::Solid;
+            }
+            State::Solid => {
+                if is(b"facet") {
+                    corners.clear();
+                    state = State::Facet;
+                } else if is(b"endsolid") {
+                    if let Some(s) = solid.take() {
+                        s.finish(&mut loaded);
+                    }
+                    state = State::Outside;
+                } else {
+                    return Err(unexpected());
+                }
+            }
+            State::Facet => {
+                let second = tokens.next();
+                if is(b"outer") && second.is_some_and(|t| t.eq_ignore_ascii_case(b"loop")) {
+                    state = State::Loop;
+                } else {
+                    return Err(unexpected());
+                }
+            }
+            State::Loop => {
+                if is(b"vertex") {
+                    let mut p = [0.0f64; 3];
+                    for (k, c) in p.iter_mut().enumerate() {
+                        let tok = tokens.next().ok_or_else(|| {
+                            fail(format!("a vertex needs x, y and z; found {k} number(s)"))
+                        })?;
+                        *c = std::str::from_utf8(tok)
+                            .ok()
+                            .and_then(|s| s.parse::<f64>().ok())
+                            .ok_or_else(|| fail(format!("{} is not a number", quoted(tok))))?;
+                    }
+                    if let Some(extra) = tokens.next() {
+                        return Err(fail(format!(
+                            "a vertex has three coordinates; found {} after them",
+                            quoted(extra)
+                        )));
+                    }
+                    if let Some(m) = bad_vertex(corners.len(), p) {
+                        return Err(fail(m));
+                    }
+                    let s = solid.as_mut().expect("a solid is open in a loop");
+                    corners.push(s.vertex(p));
+                } else if is(b"endloop") {
+                    if corners.len() < 3 {
+                        return Err(fail(format!(
+                            "a facet needs 3 vertices, found {}",
+                            corners.len()
+                        )));
+                    }
+                    state = State::LoopDone;
+                } else {
+                    return Err(unexpected());
+                }
+            }
+            State::LoopDone => {
+                if !is(b"endfacet") {
+                    return Err(unexpected());
+                }
+                let s = solid.as_mut().expect("a solid is open in a facet");
+                s.builder
+                    .push_face(&corners, None)
+                    .map_err(|e| fail(e.to_string()))?;
+                facet += 1;
+                state = State::Solid;
+            }
+        }
+    }
+    if matches!(state, State::Facet | State::Loop | State::LoopDone) {
+        let at = if solid_index > 0 {
+            format!("solid {solid_index} ")
         } else {
             String::new()
         };
-        let first_facet = loaded.objects.iter().map(|o| o.mesh.face_count()).sum();
-        let object = read_solid(path, fixed, name, hint, &prefix, first_facet)?;
-        finish(object, &mut loaded);
-    }
-    let end: usize = solids.iter().map(|s| s.len()).sum();
-    let rest = &text[end..];
-    if !rest.iter().all(u8::is_ascii_whitespace) {
-        let line = text[..end].iter().filter(|&&b| b == b'\n').count() + 1;
-        loaded.report.messages.push(format!(
-            "line {line}: {} bytes after the last endsolid that do not start another solid were ignored",
-            rest.len()
+        return Err(Error::parse(
+            path,
+            line_no.max(1),
+            format!(
+                "{at}facet {facet}: truncated: the file ends inside the facet (expected {})",
+                state.expected()
+            ),
         ));
+    }
+    // A last solid without its endsolid is kept.
+    if let Some(s) = solid {
+        s.finish(&mut loaded);
     }
     Ok(loaded)
 }
 
-/// An ASCII file cut into its `solid ... endsolid` blocks (each ends after its
-/// `endsolid` line; the last one may lack it). Bytes after an `endsolid` that do not
-/// start another `solid` are left out (the caller warns about them).
-fn split_solids(text: &[u8]) -> Vec<&[u8]> {
-    let mut solids = Vec::new();
-    let mut start = 0;
-    let mut at = 0;
-    while at < text.len() {
-        let eol = text[at..]
-            .iter()
-            .position(|&b| b == b'\n')
-            .map_or(text.len(), |i| at + i + 1);
-        let line = text[at..eol].trim_ascii_start();
-        at = eol;
-        if line.starts_with(b"endsolid") {
-            solids.push(&text[start..at]);
-            start = at;
-            let rest = text[at..].trim_ascii_start();
-            if !rest.starts_with(b"solid") {
-                return solids;
-            }
-        }
-    }
-    if start < text.len() || solids.is_empty() {
-        solids.push(&text[start..]);
-    }
-    solids
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// Finishes a solid's builder into the next object of the file.
-fn finish(object: (String, MeshBuilder), loaded: &mut Loaded) {
-    let (name, b) = object;
-    let color = palette_color(loaded.objects.len());
-    let object = finish_object(name, b, color, &mut loaded.report);
-    loaded.objects.push(object);
-}
-
-/// Reads the facets of one solid (binary, or ASCII with a normalised first line) into
-/// a builder; errors name the facet, after `prefix` (the solid, when a file has
-/// several), counting from `first_facet`.
-fn read_solid(
-    path: &Path,
-    bytes: Vec<u8>,
-    name: String,
-    count_hint: usize,
-    prefix: &str,
-    first_facet: u32,
-) -> Result<(String, MeshBuilder)> {
-    let mut cursor = Cursor::new(bytes);
-    let reader = stl_io::create_stl_reader(&mut cursor)
-        .map_err(|e| Error::format(path, format!("{prefix}header"), e.to_string()))?;
-    let count_hint = count_hint.min(1 << 24);
-    let mut b = MeshBuilder::with_capacity(count_hint / 2, count_hint);
-    let mut weld: HashMap<[u32; 3], u32> = HashMap::with_capacity(count_hint / 2);
-    for (k, facet) in reader.enumerate() {
-        let element = || format!("{prefix}facet {}", k + first_facet as usize);
-        let facet = facet.map_err(|e| Error::format(path, element(), e.to_string()))?;
-        let mut tri = [0u32; 3];
-        for (c, v) in facet.vertices.iter().enumerate() {
-            if let Some(bad) = v.0.iter().find(|x| !x.is_finite()) {
-                return Err(Error::format(
-                    path,
-                    element(),
-                    format!("vertex {c} has a non-finite coordinate ({bad})"),
-                ));
-            }
-            if let Some(m) = coordinate_out_of_range(v.0.map(f64::from)) {
-                return Err(Error::format(path, element(), format!("vertex {c}: {m}")));
-            }
-            // +0.0 turns -0.0 into +0.0 so both weld together.
-            let key = v.0.map(|x| (x + 0.0).to_bits());
-            tri[c] = *weld.entry(key).or_insert_with(|| {
-                b.push_position(DVec3::new(
-                    f64::from(v.0[0]),
-                    f64::from(v.0[1]),
-                    f64::from(v.0[2]),
-                ))
-            });
-        }
-        b.push_face(&tri, None)
-            .map_err(|e| Error::format(path, element(), e.to_string()))?;
+    #[test]
+    fn detection_follows_the_module_rules() {
+        assert_eq!(kind(b"SOLID x\n"), Kind::Ascii);
+        assert_eq!(kind(b"\xEF\xBB\xBF  \n Solid\n"), Kind::Ascii);
+        assert_eq!(kind(b"solidify\n"), Kind::Neither);
+        assert_eq!(kind(b"hello world\n"), Kind::Neither);
+        assert_eq!(kind(b"solid\0\n"), Kind::Binary);
+        let mut binary = vec![b'x'; 84];
+        binary[80..84].copy_from_slice(&0u32.to_le_bytes());
+        assert_eq!(kind(&binary), Kind::Binary);
     }
-    Ok((name, b))
-}
-
-/// Whether the bytes are a binary STL (see the module doc for the rule).
-fn is_binary(bytes: &[u8]) -> bool {
-    if bytes.len() as u64 >= BINARY_HEADER {
-        let n = u64::from(u32::from_le_bytes([
-            bytes[80], bytes[81], bytes[82], bytes[83],
-        ]));
-        if bytes.len() as u64 == BINARY_HEADER + BINARY_FACET * n {
-            return true;
-        }
-    }
-    let text = strip_bom(bytes);
-    let start = text
-        .iter()
-        .position(|b| !b.is_ascii_whitespace())
-        .unwrap_or(text.len());
-    let rest = &text[start..];
-    let says_solid = rest.starts_with(b"solid") && rest.get(5).is_none_or(u8::is_ascii_whitespace);
-    // A NUL byte early on is a binary file whose size does not match its facet count
-    // (truncated or padded), not text.
-    let has_nul = bytes[..bytes.len().min(1024)].contains(&0);
-    !says_solid || has_nul
 }

@@ -128,7 +128,7 @@ pub fn load(path: &Path) -> Result<Scene> {
     })?;
     SceneReader {
         path,
-        text: &text,
+        line_starts: super::LineIndex::new(&text),
         dir: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         cache: HashMap::new(),
         primitive_faces: std::cell::Cell::new(0),
@@ -144,7 +144,9 @@ struct CachedFile {
 
 struct SceneReader<'a> {
     path: &'a Path,
-    text: &'a str,
+    /// Finds the line of a span in O(log lines) (counting the newlines before it for
+    /// every referenced mesh file made many files quadratic).
+    line_starts: super::LineIndex,
     dir: PathBuf,
     cache: HashMap<PathBuf, Arc<CachedFile>>,
     /// Faces of the primitives generated so far (see [`MAX_PRIMITIVE_FACES`]).
@@ -153,7 +155,7 @@ struct SceneReader<'a> {
 
 impl SceneReader<'_> {
     fn line(&self, span: &Range<usize>) -> usize {
-        line_of_offset(self.text, span.start)
+        self.line_starts.line(span.start)
     }
 
     fn error(&self, span: &Range<usize>, message: impl Into<String>) -> Error {
@@ -330,12 +332,9 @@ impl SceneReader<'_> {
             up,
         } = load_objects(&full).map_err(|e| with_reference(e, &reference))?;
         // The mesh file's warnings do not name it (its caller would); here the caller
-        // is the scene file, so they get the mesh file's name.
-        let mut report = report;
-        for m in &mut report.messages {
-            *m = format!("{}: {m}", full.display());
-        }
-        scene.report_mut().merge(&report);
+        // is the scene file, so they get the mesh file's name, the counts of dropped
+        // and triangulated faces too.
+        scene.report_mut().merge_from_file(&report, &full);
         if objects.iter().all(|o| o.mesh.polygon_count() == 0) {
             scene
                 .report_mut()
