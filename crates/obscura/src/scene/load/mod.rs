@@ -64,10 +64,8 @@ use crate::{Error, Result};
 /// # Example
 /// ```
 /// use obscura::scene::load::LoadOptions;
-/// let options = LoadOptions {
-///     allow_outside_references: true,
-///     ..LoadOptions::default()
-/// };
+/// let options = LoadOptions::default().with_allow_outside_references(true);
+/// assert!(options.allow_outside_references);
 /// assert!(options.memory_limit.is_none());
 /// ```
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -80,6 +78,15 @@ pub struct LoadOptions {
     /// The memory budget of the load in bytes; `None` takes the default budget of a
     /// run (see the crate's memory budget).
     pub memory_limit: Option<u64>,
+}
+
+impl LoadOptions {
+    /// Sets [`LoadOptions::allow_outside_references`].
+    #[must_use]
+    pub fn with_allow_outside_references(mut self, allow: bool) -> Self {
+        self.allow_outside_references = allow;
+        self
+    }
 }
 
 /// What a mesh file yields before it is placed in a scene.
