@@ -105,7 +105,11 @@ fn assert_outside(e: &Error, path: &Path, element: &str, reference: &str, reason
 
 fn load_err(path: &Path) -> Error {
     match load_file(path) {
-        Ok(s) => panic!("{} should be refused, loaded {}", path.display(), s.face_count()),
+        Ok(s) => panic!(
+            "{} should be refused, loaded {}",
+            path.display(),
+            s.face_count()
+        ),
         Err(e) => e,
     }
 }
@@ -134,9 +138,17 @@ fn gltf_buffers_outside_the_folder_are_refused_unless_allowed() {
         ("absolute.gltf", abs.clone(), "absolute path"),
         ("file.gltf", format!("file://{abs}"), "file: URI"),
         ("file1.gltf", format!("file:{abs}"), "file: URI"),
-        ("filehost.gltf", format!("FILE://localhost{abs}"), "file: URI"),
+        (
+            "filehost.gltf",
+            format!("FILE://localhost{abs}"),
+            "file: URI",
+        ),
         ("link.gltf", "link.bin".to_string(), "symbolic link"),
-        ("dirlink.gltf", "up/outside.bin".to_string(), "symbolic link"),
+        (
+            "dirlink.gltf",
+            "up/outside.bin".to_string(),
+            "symbolic link",
+        ),
     ];
     for (name, uri, reason) in &cases {
         let p = d.write(&format!("scene/{name}"), gltf(uri));
@@ -147,7 +159,11 @@ fn gltf_buffers_outside_the_folder_are_refused_unless_allowed() {
         assert_eq!(s.source_files(), [canonical(&p), outside.clone()], "{name}");
     }
     // Remote URIs are refused whatever the option.
-    for uri in ["http://example.com/x.bin", "https://h/x.bin", "ftp://h/x.bin"] {
+    for uri in [
+        "http://example.com/x.bin",
+        "https://h/x.bin",
+        "ftp://h/x.bin",
+    ] {
         let p = d.write("scene/remote.gltf", gltf(uri));
         for options in [LoadOptions::default(), allowed()] {
             let e = load_file_with(&p, &options).expect_err(uri);
@@ -164,7 +180,12 @@ fn gltf_buffers_inside_the_folder_and_data_uris_load() {
     let d = Dirs::new("gltf-inside");
     let bin = d.write("scene/sub/in.bin", triangle_bin(TRIANGLE));
     std::os::unix::fs::symlink("sub/in.bin", d.scene().join("inlink.bin")).unwrap();
-    for uri in ["sub/in.bin", "./sub/../sub/in.bin", "sub/%69n.bin", "inlink.bin"] {
+    for uri in [
+        "sub/in.bin",
+        "./sub/../sub/in.bin",
+        "sub/%69n.bin",
+        "inlink.bin",
+    ] {
         let p = d.write("scene/in.gltf", gltf(uri));
         let s = load_file(&p).unwrap_or_else(|e| panic!("{uri}: {e}"));
         assert_eq!(s.face_count(), 1, "{uri}");
@@ -288,7 +309,11 @@ fn scene_file_meshes_outside_the_folder_are_refused_unless_allowed() {
         assert_outside(&load_err(&p), &p, "line 3", reference, reason);
         let s = load_allowed(&p);
         assert_eq!(s.face_count(), 1, "{reference}");
-        assert_eq!(s.source_files(), [canonical(&p), mesh.clone()], "{reference}");
+        assert_eq!(
+            s.source_files(),
+            [canonical(&p), mesh.clone()],
+            "{reference}"
+        );
     }
 }
 
@@ -368,7 +393,10 @@ fn errors_do_not_quote_values_read_from_a_buffer_file() {
     }
     // Placed by a scene file far out: the scene's error names the object, not the
     // buffer's values.
-    d.write("scene/v.bin", triangle_bin([[0., 0., 0.], [secret, 0., 0.], [0., 1., 0.]]));
+    d.write(
+        "scene/v.bin",
+        triangle_bin([[0., 0., 0.], [secret, 0., 0.], [0., 1., 0.]]),
+    );
     d.write("scene/t.gltf", gltf("v.bin"));
     let p = d.write(
         "scene/far.toml",

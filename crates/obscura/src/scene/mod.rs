@@ -252,10 +252,7 @@ impl Scene {
                 "a vertex overflows to a non-finite value when transformed".into(),
             ));
         }
-        if world
-            .iter()
-            .any(|p| p.abs().max_element() > MAX_COORDINATE)
-        {
+        if world.iter().any(|p| p.abs().max_element() > MAX_COORDINATE) {
             return Err(invalid(format!(
                 "a vertex (after the transform) is beyond the largest coordinate \
                  accepted, {MAX_COORDINATE:e}"

@@ -646,7 +646,11 @@ fn build_mesh(
         // Indices are checked above; the builder's error would quote an index.
         let mut push = |t: [u32; 3]| {
             b.push_face(&t, Some(mid)).map(|_| ()).map_err(|_| {
-                Error::format(path, &index_element, "a triangle refers to a missing vertex")
+                Error::format(
+                    path,
+                    &index_element,
+                    "a triangle refers to a missing vertex",
+                )
             })
         };
         let len = indices.len();
