@@ -673,6 +673,7 @@ fn write_triangle_scene(dir: &std::path::Path) -> (&'static str, &'static str, &
 /// No output may be a file the load read (a mesh of a scene file, a material library),
 /// whatever its spelling, a symbolic link or a hard link to it; nothing is left behind
 /// and the inputs are unchanged.
+#[cfg(unix)]
 #[test]
 fn outputs_that_are_files_the_scene_reads_are_refused() {
     let dir = tempdir("inputs");
@@ -769,6 +770,7 @@ fn outputs_that_are_files_the_scene_reads_are_refused() {
 
 /// Each output wants its format's extension (any case); another, or none, is refused
 /// before any work unless --force-extension; devices have no extension to check.
+#[cfg(unix)]
 #[test]
 fn outputs_are_checked_against_their_kind() {
     let dir = tempdir("extensions");
@@ -903,6 +905,7 @@ fn references_outside_the_scene_folder_need_the_flag() {
 
 /// Interrupted (SIGTERM, SIGINT), a run removes its temporary files, ends with 128 +
 /// the signal's number and leaves an earlier output as it was.
+#[cfg(unix)]
 #[test]
 fn an_interrupted_run_leaves_no_temporary_files() {
     for (signal, code) in [("TERM", 143), ("INT", 130)] {

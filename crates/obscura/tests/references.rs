@@ -2,6 +2,8 @@
 //! inside the referring file's folder tree unless `allow_outside_references` is set, and
 //! every file read listed by `Scene::source_files`. Every file is written here, in a
 //! folder `scene/` beside the "outside" files a hostile scene would reach for.
+//! (Unix only: the tests make symbolic links.)
+#![cfg(unix)]
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
