@@ -12,7 +12,7 @@ use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
 use crate::out::{errln, out, outln};
-use crate::outputs::Outputs;
+use crate::outputs::{OutputArgs, Outputs};
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -41,8 +41,10 @@ pub struct BenchArgs {
     #[command(flatten)]
     pub tuning: AlgoArgs,
     /// Also write the results as JSON.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub naming: OutputArgs,
 }
 
 /// The largest `--max-faces`: ten times the default sweep. A generated scene, its
@@ -163,11 +165,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut outputs = Outputs::stage(
         args.view.scene.as_deref(),
         &[("--json", args.json.as_deref())],
+        args.naming,
     )?;
     let base = match &args.view.scene {
         Some(_) => Some(args.view.load()?),
         None => None,
     };
+    if let Some(l) = &base {
+        outputs.check_inputs(l.scene.source_files())?;
+    }
     let max = match &base {
         Some(l) => args.max_faces.min(l.scene.polygon_count()),
         None => args.max_faces,

@@ -49,6 +49,12 @@ pub struct ViewArgs {
     /// Worker threads, at most 1024 (default: all cores; 1 for single-thread figures).
     #[arg(long, value_name = "N", value_parser = parse_threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
+    /// Let the scene read files outside its own folder: absolute paths, `..`, symbolic
+    /// links leading out, file: URIs in its glTF buffers, OBJ mtllib lines and scene-file
+    /// meshes. By default every file a scene refers to must be inside the folder of the
+    /// file that refers to it.
+    #[arg(long)]
+    pub allow_outside_references: bool,
 }
 
 /// Options that tune particular algorithms.
@@ -194,7 +200,9 @@ impl ViewArgs {
             .clone()
             .unwrap_or_else(|| "demo:default".to_string());
         let start = Instant::now();
-        let scene = Scene::load(&spec)?;
+        let options = obscura::scene::load::LoadOptions::default()
+            .with_allow_outside_references(self.allow_outside_references);
+        let scene = Scene::load_with(&spec, &options)?;
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         scene.ensure_not_empty(&spec)?;
         for w in scene.report().warnings() {
@@ -317,6 +325,25 @@ impl ViewArgs {
             .build()
             .map_err(|e| Error::option("--threads", e.to_string()))?;
         Ok(pool.install(f))
+    }
+}
+
+/// The message of an error for the command line: the library's, except where it names
+/// a library option the command line spells as a flag.
+pub fn message(e: &Error) -> String {
+    match e {
+        Error::OutsideReference {
+            path,
+            element,
+            reference,
+            reason,
+        } => format!(
+            "{}: {element}: reference \"{reference}\" {reason}: a scene reads only files \
+             inside the folder of the file that refers to them (pass \
+             --allow-outside-references to allow it)",
+            path.display()
+        ),
+        e => e.to_string(),
     }
 }
 

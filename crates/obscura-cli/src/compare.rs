@@ -12,7 +12,7 @@ use serde_json::json;
 use crate::common::{AlgoArgs, ViewArgs, progress_bar};
 use crate::grid;
 use crate::out::out;
-use crate::outputs::Outputs;
+use crate::outputs::{OutputArgs, Outputs};
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -38,8 +38,10 @@ pub struct CompareArgs {
     )]
     pub output: PathBuf,
     /// Also write the table as JSON.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub naming: OutputArgs,
 }
 
 /// One row of the table.
@@ -109,8 +111,10 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let mut outputs = Outputs::stage(
         args.view.scene.as_deref(),
         &[("-o", Some(&args.output)), ("--json", args.json.as_deref())],
+        args.naming,
     )?;
     let loaded = args.view.load()?;
+    outputs.check_inputs(loaded.scene.source_files())?;
     let scene = &loaded.scene;
     let viewport = args.view.viewport_or(scene, (480, 270))?;
     let camera = args.view.camera(scene, viewport)?;

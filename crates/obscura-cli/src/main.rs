@@ -44,6 +44,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    outputs::remove_temporaries_on_signal();
     let result = match cli.command {
         Command::Render(args) => render::run(&args),
         Command::Compare(args) => compare::run(&args),
@@ -52,7 +53,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            errln!("error: {e}");
+            errln!("error: {}", common::message(&e));
             ExitCode::FAILURE
         }
     }

@@ -12,7 +12,7 @@ use serde_json::json;
 use crate::common::{AlgoArgs, ViewArgs};
 use crate::errln;
 use crate::out::outln;
-use crate::outputs::Outputs;
+use crate::outputs::{OutputArgs, Outputs};
 
 pub const EXAMPLES: &str = "\
 Examples:
@@ -63,8 +63,10 @@ pub struct RenderArgs {
     #[arg(long)]
     pub stats: bool,
     /// Write the statistics as JSON (load_ms, render_ms, stages, algorithm stats).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE.json")]
     pub stats_json: Option<PathBuf>,
+    #[command(flatten)]
+    pub naming: OutputArgs,
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
@@ -76,8 +78,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             ("--depth", args.depth.as_deref()),
             ("--stats-json", args.stats_json.as_deref()),
         ],
+        args.naming,
     )?;
     let loaded = args.view.load()?;
+    outputs.check_inputs(loaded.scene.source_files())?;
     let scene = &loaded.scene;
     let viewport = args.view.viewport(scene)?;
     let camera = args.view.camera(scene, viewport)?;

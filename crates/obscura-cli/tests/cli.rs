@@ -698,3 +698,320 @@ fn camera_and_argument_errors_name_what_the_user_gave() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A triangle OBJ with a material library, and a scene file placing it, in `dir`.
+fn write_triangle_scene(dir: &std::path::Path) -> (&'static str, &'static str, &'static str) {
+    let mtl = "newmtl red\nKd 1 0 0\n";
+    let obj = "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n";
+    let toml = "[[object]]\nmesh = \"tri.obj\"\n";
+    std::fs::write(dir.join("tri.mtl"), mtl).unwrap();
+    std::fs::write(dir.join("tri.obj"), obj).unwrap();
+    std::fs::write(dir.join("scene.toml"), toml).unwrap();
+    (mtl, obj, toml)
+}
+
+/// No output may be a file the load read (a mesh of a scene file, a material library),
+/// whatever its spelling, a symbolic link or a hard link to it; nothing is left behind
+/// and the inputs are unchanged.
+#[cfg(unix)]
+#[test]
+fn outputs_that_are_files_the_scene_reads_are_refused() {
+    let dir = tempdir("inputs");
+    let (mtl, obj, toml) = write_triangle_scene(&dir);
+    std::fs::hard_link(dir.join("tri.obj"), dir.join("hard.npy")).unwrap();
+    std::os::unix::fs::symlink("tri.mtl", dir.join("link.json")).unwrap();
+    let before = listing(&dir);
+    let cases: [(&[&str], &[&str]); 6] = [
+        (
+            &["render", "tri.obj", "--stats-json", "tri.mtl"],
+            &["--stats-json", "tri.mtl", "expected", ".json"],
+        ),
+        (
+            &[
+                "render",
+                "tri.obj",
+                "--stats-json",
+                "./tri.mtl",
+                "--force-extension",
+            ],
+            &["--stats-json", "tri.mtl", "refusing to overwrite an input"],
+        ),
+        (
+            &[
+                "render",
+                "scene.toml",
+                "--ids",
+                "tri.obj",
+                "--force-extension",
+            ],
+            &[
+                "--ids",
+                "tri.obj",
+                "scene.toml",
+                "refusing to overwrite an input",
+            ],
+        ),
+        (
+            &["render", "scene.toml", "--ids", "hard.npy"],
+            &[
+                "--ids",
+                "hard.npy",
+                "tri.obj",
+                "refusing to overwrite an input",
+            ],
+        ),
+        (
+            &[
+                "compare",
+                "tri.obj",
+                "--json",
+                "link.json",
+                "--algos",
+                "bsp",
+            ],
+            &[
+                "--json",
+                "link.json",
+                "tri.mtl",
+                "refusing to overwrite an input",
+            ],
+        ),
+        (
+            &[
+                "bench",
+                "scene.toml",
+                "--json",
+                "hard.npy",
+                "--force-extension",
+            ],
+            &["--json", "hard.npy", "refusing to overwrite an input"],
+        ),
+    ];
+    for (args, expected) in cases {
+        let mut args = args.to_vec();
+        args.extend(["--size", "8x8"]);
+        let o = obscura(&args, &dir);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {t}");
+        for e in expected {
+            let e = e.replace("expected", "name the file");
+            assert!(t.contains(&e), "{args:?}: expected {e:?} in {t}");
+        }
+        assert_eq!(listing(&dir), before, "{args:?}");
+        assert_eq!(std::fs::read_to_string(dir.join("tri.mtl")).unwrap(), mtl);
+        assert_eq!(std::fs::read_to_string(dir.join("tri.obj")).unwrap(), obj);
+        assert_eq!(
+            std::fs::read_to_string(dir.join("scene.toml")).unwrap(),
+            toml
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Each output wants its format's extension (any case); another, or none, is refused
+/// before any work unless --force-extension; devices have no extension to check.
+#[cfg(unix)]
+#[test]
+fn outputs_are_checked_against_their_kind() {
+    let dir = tempdir("extensions");
+    let refused: [(&[&str], &str, &str); 8] = [
+        (&["render", "-o", "x.jpg"], "-o", ".png"),
+        (&["render", "-o", "picture"], "-o", ".png"),
+        (&["render", "--ids", "ids.txt"], "--ids", ".npy"),
+        (&["render", "--depth", "d.png"], "--depth", ".npy"),
+        (
+            &["render", "--stats-json", "s.npy"],
+            "--stats-json",
+            ".json",
+        ),
+        (&["compare", "-o", "grid.npy"], "-o", ".png"),
+        (&["compare", "--json", "c.csv"], "--json", ".json"),
+        (
+            &["bench", "--json", "b.txt", "--max-faces", "10"],
+            "--json",
+            ".json",
+        ),
+    ];
+    for (args, option, want) in refused {
+        let mut args = args.to_vec();
+        args.extend(["demo:cube", "--size", "8x8"]);
+        let o = obscura(&args, &dir);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {t}");
+        for e in [
+            option,
+            &format!("name the file {want}"),
+            "--force-extension",
+        ] {
+            assert!(t.contains(e), "{args:?}: expected {e:?} in {t}");
+        }
+        assert!(listing(&dir).is_empty(), "{args:?}: {:?}", listing(&dir));
+        // Forced, the same name is written, in the option's format.
+        args.push("--force-extension");
+        let o = obscura(&args, &dir);
+        assert!(o.status.success(), "{args:?}: {}", text(&o));
+        let name = args[args.iter().position(|a| *a == option).unwrap() + 1];
+        let bytes = std::fs::read(dir.join(name)).unwrap();
+        let magic: &[u8] = match want {
+            ".png" => b"\x89PNG",
+            ".npy" => b"\x93NUMPY",
+            _ => b"{",
+        };
+        assert!(bytes.starts_with(magic), "{args:?}: {name}");
+        for f in listing(&dir) {
+            std::fs::remove_file(dir.join(f)).unwrap();
+        }
+    }
+    // Upper-case extensions are theirs too, and a device is written in place.
+    let o = obscura(
+        &[
+            "render",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "-o",
+            "UP.PNG",
+            "--ids",
+            "I.Npy",
+            "--stats-json",
+            "/dev/null",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(listing(&dir), ["I.Npy", "UP.PNG"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Files outside the scene's folder are read only with --allow-outside-references, on
+/// every subcommand; the message names the file, the line, the reference and the flag.
+#[test]
+fn references_outside_the_scene_folder_need_the_flag() {
+    let dir = tempdir("outside");
+    std::fs::create_dir_all(dir.join("s")).unwrap();
+    std::fs::write(dir.join("out.mtl"), "newmtl red\nKd 1 0 0\n").unwrap();
+    std::fs::write(dir.join("m.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::fs::write(
+        dir.join("s/tri.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nmtllib ../out.mtl\nusemtl red\nf 1 2 3\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("s/scene.toml"),
+        "[[object]]\nmesh = \"../m.obj\"\n",
+    )
+    .unwrap();
+    let cases: [(&[&str], &str, &str); 4] = [
+        (&["render", "s/tri.obj"], "s/tri.obj: line 4", "../out.mtl"),
+        (
+            &["render", "s/scene.toml"],
+            "s/scene.toml: line 2",
+            "../m.obj",
+        ),
+        (
+            &["compare", "s/scene.toml", "--algos", "bsp"],
+            "s/scene.toml: line 2",
+            "../m.obj",
+        ),
+        (
+            &["bench", "s/tri.obj", "--algos", "zbuffer"],
+            "s/tri.obj",
+            "../out.mtl",
+        ),
+    ];
+    for (args, at, reference) in cases {
+        let mut args = args.to_vec();
+        args.extend(["--size", "8x8"]);
+        let o = obscura(&args, &dir);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {t}");
+        for e in [
+            at,
+            &format!("\"{reference}\""),
+            "--allow-outside-references",
+        ] {
+            assert!(t.contains(e), "{args:?}: expected {e:?} in {t}");
+        }
+        assert!(
+            !t.contains("LoadOptions"),
+            "a library name in a CLI message: {t}"
+        );
+        args.push("--allow-outside-references");
+        let o = obscura(&args, &dir);
+        assert!(o.status.success(), "{args:?}: {}", text(&o));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Interrupted (SIGTERM, SIGINT), a run removes its temporary files, ends with 128 +
+/// the signal's number and leaves an earlier output as it was.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_leaves_no_temporary_files() {
+    for (signal, code) in [("TERM", 143), ("INT", 130)] {
+        let dir = tempdir(&format!("signal-{signal}"));
+        std::fs::write(dir.join("slow.png"), "earlier output").unwrap();
+        // Brute-force ray casting of a million triangles: minutes of work.
+        let mut child = Command::new(env!("CARGO_BIN_EXE_obscura"))
+            .args([
+                "render",
+                "demo:sphere",
+                "--algo",
+                "raycast",
+                "--size",
+                "400x400",
+                "--threads",
+                "1",
+                "-o",
+                "slow.png",
+                "--ids",
+                "slow.npy",
+            ])
+            .current_dir(&dir)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("the binary runs");
+        let temporaries = |dir: &PathBuf| {
+            listing(dir)
+                .into_iter()
+                .filter(|n| n.contains(".obscura-") && n.ends_with(".tmp"))
+                .count()
+        };
+        let start = std::time::Instant::now();
+        while temporaries(&dir) < 2 {
+            assert!(
+                start.elapsed().as_secs() < 30,
+                "no temporary files after 30 s: {:?}",
+                listing(&dir)
+            );
+            assert!(child.try_wait().unwrap().is_none(), "the run ended early");
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        // Into the load or the rendering.
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        let killed = Command::new("kill")
+            .args(["-s", signal, &child.id().to_string()])
+            .status()
+            .expect("kill runs");
+        assert!(killed.success());
+        let start = std::time::Instant::now();
+        let status = loop {
+            if let Some(s) = child.try_wait().unwrap() {
+                break s;
+            }
+            if start.elapsed().as_secs() >= 20 {
+                child.kill().ok();
+                panic!("SIG{signal}: still running after 20 s");
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        };
+        assert_eq!(status.code(), Some(code), "SIG{signal}: {status:?}");
+        assert_eq!(listing(&dir), ["slow.png"], "SIG{signal}");
+        assert_eq!(
+            std::fs::read_to_string(dir.join("slow.png")).unwrap(),
+            "earlier output"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

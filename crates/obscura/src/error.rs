@@ -39,6 +39,25 @@ pub enum Error {
         /// What is wrong with it.
         message: String,
     },
+    /// A file refers to another file outside its own folder tree (an absolute path,
+    /// a `file:` URI, a `..` or a symbolic link leading out): refused unless
+    /// [`LoadOptions::allow_outside_references`](crate::scene::load::LoadOptions) is set.
+    #[error(
+        "{}: {element}: reference \"{reference}\" {reason}: a scene reads only files inside \
+         the folder of the file that refers to them (set `allow_outside_references` in \
+         `LoadOptions` to allow it)",
+        path.display()
+    )]
+    OutsideReference {
+        /// The file that holds the reference.
+        path: PathBuf,
+        /// Where in it: `line 3`, `buffer 0`.
+        element: String,
+        /// The reference as written in the file.
+        reference: String,
+        /// Why it leads outside, e.g. `is an absolute path`.
+        reason: String,
+    },
     /// The file extension is not one obscura can read.
     #[error("{}: unsupported file type (expected .obj, .gltf, .glb, .stl, .ply or .toml)", path.display())]
     UnsupportedFormat {

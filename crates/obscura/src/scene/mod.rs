@@ -14,7 +14,7 @@ pub mod load;
 mod mesh;
 pub mod random;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glam::{DMat4, DVec3};
@@ -152,6 +152,7 @@ pub struct Scene {
     up: Option<DVec3>,
     report: LoadReport,
     face_count: u32,
+    sources: Vec<PathBuf>,
 }
 
 /// Colours given to objects that have none, in order.
@@ -185,9 +186,23 @@ impl Scene {
     /// [`Scene::load`] with options: what the scene may read and how much it may
     /// build (see [`load::LoadOptions`]).
     pub fn load_with(spec: &str, options: &load::LoadOptions) -> Result<Scene> {
-        // The options are plumbed through the loaders by the work on issue 21.
-        let _ = options;
-        Self::load(spec)
+        if let Some(name) = spec.strip_prefix("demo:") {
+            return demo::scene(name);
+        }
+        load::load_file_with(Path::new(spec), options)
+    }
+
+    /// The files loading read (the scene file, mesh files, material libraries, glTF
+    /// buffers), canonical, each once, in the order first read; empty for a scene
+    /// built in memory. A caller writing files can refuse to overwrite any of them.
+    #[must_use]
+    pub fn source_files(&self) -> &[PathBuf] {
+        &self.sources
+    }
+
+    /// Sets the list [`Scene::source_files`] returns.
+    pub(crate) fn set_source_files(&mut self, files: Vec<PathBuf>) {
+        self.sources = files;
     }
 
     /// Adds an object, checking it, assigning its face ids and computing its bounds
@@ -213,8 +228,10 @@ impl Scene {
                 "the transform is singular (flattens the object)".into(),
             ));
         }
-        if let Some(p) = desc.mesh.positions().iter().find(|p| !p.is_finite()) {
-            return Err(invalid(format!("vertex {:?} is not finite", p.to_array())));
+        // Messages name vertices by index, not value: the values may come from a file
+        // other than the one whose loader reports the error (a glTF's buffer).
+        if let Some(i) = desc.mesh.positions().iter().position(|p| !p.is_finite()) {
+            return Err(invalid(format!("vertex {i} is not finite")));
         }
         let world: Vec<DVec3> = {
             let (_, idx, _) = desc.mesh.polygon_arrays();
@@ -230,20 +247,15 @@ impl Scene {
                 .map(|(&p, _)| desc.transform.transform_point3(p))
                 .collect()
         };
-        if let Some(p) = world.iter().find(|p| !p.is_finite()) {
-            return Err(invalid(format!(
-                "a vertex overflows to {:?} when transformed",
-                p.to_array()
-            )));
+        if world.iter().any(|p| !p.is_finite()) {
+            return Err(invalid(
+                "a vertex overflows to a non-finite value when transformed".into(),
+            ));
         }
-        if let Some(p) = world
-            .iter()
-            .find(|p| p.abs().max_element() > MAX_COORDINATE)
-        {
+        if world.iter().any(|p| p.abs().max_element() > MAX_COORDINATE) {
             return Err(invalid(format!(
-                "vertex {:?} (after the transform) is beyond the largest coordinate \
-                 accepted, {MAX_COORDINATE:e}",
-                p.to_array()
+                "a vertex (after the transform) is beyond the largest coordinate \
+                 accepted, {MAX_COORDINATE:e}"
             )));
         }
         let bounds = Aabb::from_points(world.iter().copied());

@@ -31,9 +31,18 @@
 //! optional byte-order mark and white space) is JSON (also when named `.glb`); any
 //! other start is an error naming the first bytes in hex and what was expected.
 //!
-//! Buffers: the GLB binary chunk, base64 `data:` URIs, and files (relative to the glTF,
-//! or `file:` URIs); remote (`http:`, `https:`...) URIs are refused. A UTF-8 byte-order
-//! mark before the JSON is skipped, as the specification allows.
+//! Buffers: the GLB binary chunk, base64 `data:` URIs, and files inside the glTF's own
+//! folder tree, by the rule every loader follows ([`super::reference`]): absolute
+//! paths, `file:` URIs and references leading out of the folder (by `..` or a symbolic
+//! link) are refused unless
+//! [`LoadOptions::allow_outside_references`](super::LoadOptions) is set; remote
+//! (`http:`, `https:`...) URIs are always refused. Image URIs are never read (textures
+//! are not used), so they are not checked. A UTF-8 byte-order mark before the JSON is
+//! skipped, as the specification allows.
+//!
+//! Messages never quote the values decoded from a buffer (a buffer may be another
+//! file, and its bytes are not the glTF's to print): they name the accessor and the
+//! position of the element instead.
 //!
 //! Errors (naming the file and the element): invalid JSON or GLB container, a missing,
 //! remote or short buffer (naming it and its URI), an accessor outside its buffer view,
@@ -57,7 +66,11 @@ use gl::accessor::{DataType, Dimensions};
 use gl::mesh::Mode;
 use glam::{DMat4, DQuat, DVec3};
 
-use super::{Loaded, Tally, clamp_color, coordinate_out_of_range, palette_color, strip_bom};
+use super::reference::{Sources, Syntax};
+use super::{
+    LoadOptions, Loaded, MAX_COORDINATE, Tally, clamp_color, coordinate_out_of_range,
+    palette_color, strip_bom,
+};
 use crate::scene::{Material, Mesh, MeshBuilder, ObjectDesc};
 use crate::{Error, Result};
 
@@ -65,8 +78,16 @@ use crate::{Error, Result};
 /// substitutions) may declare.
 pub const MAX_VIEWLESS_COUNT: usize = 1 << 24;
 
-/// Loads a glTF or GLB file from its bytes (`path` names it and locates its buffers).
+/// Loads a glTF or GLB file from its bytes (`path` names it and locates its buffers),
+/// with the default [`LoadOptions`]: buffers only inside the file's folder tree.
 pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
+    let options = LoadOptions::default();
+    load_in(path, bytes, &mut Sources::new(&options))
+}
+
+/// [`load`] within a load: its options say which buffers may be read, and the buffer
+/// files read are recorded in `sources`.
+pub(crate) fn load_in(path: &Path, bytes: &[u8], sources: &mut Sources<'_>) -> Result<Loaded> {
     check_container(path, bytes)?;
     check_glb_header(path, bytes)?;
     let element = if bytes.starts_with(b"glTF") {
@@ -87,7 +108,7 @@ pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
     check_accessor_indices(path, gltf.document.as_json())?;
     let document = gl::Document::from_json(gltf.document.into_json()).map_err(invalid)?;
     let doc = &document;
-    let buffers = load_buffers(path, doc, gltf.blob)?;
+    let buffers = load_buffers(path, doc, gltf.blob, sources)?;
     let mut budget = decode_budget(&buffers);
     let mut loaded = Loaded {
         up: Some(DVec3::Y),
@@ -299,13 +320,11 @@ fn world_out_of_range(mesh: &Mesh, bounds: crate::geom::Aabb, world: &DMat4) -> 
     }
     let (_, indices, _) = mesh.polygon_arrays();
     indices.iter().find_map(|&i| {
-        let p = mesh.positions()[i as usize];
-        let w = world.transform_point3(p);
-        coordinate_out_of_range(w.to_array()).map(|m| {
+        let w = world.transform_point3(mesh.positions()[i as usize]);
+        coordinate_out_of_range(w.to_array()).map(|_| {
             format!(
-                "vertex {:?} is placed at {:?}: {m}",
-                p.to_array(),
-                w.to_array()
+                "a vertex is placed beyond the largest coordinate accepted, \
+                 {MAX_COORDINATE:e}, by the node's transform"
             )
         })
     })
@@ -459,47 +478,28 @@ fn check_accessor_indices(path: &Path, root: &gl::json::Root) -> Result<()> {
     Ok(())
 }
 
-/// Reads a buffer held in a file (a URI that is not a `data:` one), relative to the
-/// glTF's folder unless `file:`: its percent-encoding decoded, only a regular file, at
-/// most the buffer's declared length read. Errors name the glTF file and `element`
-/// (the buffer and its URI), then the file that could not be read. Other schemes
-/// (`http:`, `https:`...) are refused: obscura reads no network.
+/// Reads a buffer held in a file (a URI that is not a `data:` one), resolved by the
+/// rule of [`super::reference`]: only a regular file, at most the buffer's declared
+/// length read. Errors name the glTF file and `element` (the buffer and its URI), then
+/// the file that could not be read; a reference the rule refuses is an
+/// [`Error::OutsideReference`] naming the buffer.
 fn read_buffer_file(
     path: &Path,
+    index: usize,
     element: &str,
-    base: &Path,
     uri: &str,
     length: usize,
+    sources: &mut Sources<'_>,
 ) -> Result<Vec<u8>> {
-    if let Some(scheme) = uri_scheme(uri).filter(|s| !s.eq_ignore_ascii_case("file")) {
-        return Err(Error::format(
-            path,
-            element,
-            format!(
-                "remote buffers are not supported ({scheme}: URI); download the file next to \
-                 the glTF and refer to it by a relative URI"
-            ),
-        ));
-    }
-    let (rest, relative) = match uri
-        .strip_prefix("file://")
-        .or_else(|| uri.strip_prefix("file:"))
-    {
-        Some(rest) => (rest, false),
-        None => (uri, true),
-    };
-    let name = percent_decode(rest).ok_or_else(|| {
-        Error::format(
-            path,
-            element,
-            format!("URI \"{uri}\" is not valid percent-encoded UTF-8"),
-        )
-    })?;
-    let file = if relative {
-        base.join(&name)
-    } else {
-        std::path::PathBuf::from(&name)
-    };
+    let file = sources
+        .resolve(path, &format!("buffer {index}"), uri, Syntax::Uri)
+        .map_err(|e| match e {
+            Error::Format { message, .. } => Error::format(path, element, message),
+            Error::Io { path: file, source } => {
+                Error::format(path, element, format!("{}: {source}", file.display()))
+            }
+            other => other,
+        })?;
     let io = |e: std::io::Error| Error::format(path, element, format!("{}: {e}", file.display()));
     super::check_regular_file(&file).map_err(io)?;
     let mut data = Vec::new();
@@ -508,36 +508,8 @@ fn read_buffer_file(
         &mut data,
     )
     .map_err(io)?;
+    sources.record(&file);
     Ok(data)
-}
-
-/// The scheme of an absolute URI (`http` in `http://host/x.bin`), if it has one. A
-/// relative reference cannot have a colon in its first segment (RFC 3986, 4.2), and a
-/// one-letter scheme would be a Windows drive (`C:`), taken as a path.
-fn uri_scheme(uri: &str) -> Option<&str> {
-    let (scheme, _) = uri.split_once(':')?;
-    let mut chars = scheme.chars();
-    let valid = chars.next().is_some_and(|c| c.is_ascii_alphabetic())
-        && chars.all(|c| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.'));
-    (valid && scheme.len() > 1).then_some(scheme)
-}
-
-/// Decodes `%XX` escapes; `None` when an escape is malformed or the result is not UTF-8.
-fn percent_decode(s: &str) -> Option<String> {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut k = 0;
-    while k < b.len() {
-        if b[k] == b'%' {
-            let hex = std::str::from_utf8(b.get(k + 1..k + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            k += 3;
-        } else {
-            out.push(b[k]);
-            k += 1;
-        }
-    }
-    String::from_utf8(out).ok()
 }
 
 /// Reads every buffer (GLB binary chunk, `data:` URI, or file next to the glTF).
@@ -545,8 +517,8 @@ fn load_buffers(
     path: &Path,
     doc: &gl::Document,
     mut blob: Option<Vec<u8>>,
+    sources: &mut Sources<'_>,
 ) -> Result<Vec<Vec<u8>>> {
-    let base = path.parent().unwrap_or(Path::new(""));
     let mut out = Vec::new();
     for buffer in doc.buffers() {
         let element = match buffer.source() {
@@ -556,10 +528,19 @@ fn load_buffers(
             _ => format!("buffer {}", buffer.index()),
         };
         let data = match buffer.source() {
-            gl::buffer::Source::Uri(uri) if !uri.starts_with("data:") => gl::buffer::Data(
-                read_buffer_file(path, &element, base, uri, buffer.length())?,
-            ),
-            source => gl::buffer::Data::from_source_and_blob(source, Some(base), &mut blob)
+            gl::buffer::Source::Uri(uri) if !uri.starts_with("data:") => {
+                gl::buffer::Data(read_buffer_file(
+                    path,
+                    buffer.index(),
+                    &element,
+                    uri,
+                    buffer.length(),
+                    sources,
+                )?)
+            }
+            // Only `data:` URIs and the GLB chunk reach the crate, which is given no
+            // folder to read files from.
+            source => gl::buffer::Data::from_source_and_blob(source, None, &mut blob)
                 .map_err(|e| Error::format(path, element.clone(), e.to_string()))?,
         };
         if data.0.len() < buffer.length() {
@@ -642,15 +623,24 @@ fn build_mesh(
                     .map_err(|m| Error::format(path, &pos_element, m))?;
                 for (i, p) in xyz.chunks_exact(3).enumerate() {
                     let p = DVec3::new(p[0], p[1], p[2]);
+                    // The values are not quoted: they come from a buffer (see the
+                    // module docs).
                     if !p.is_finite() {
                         return Err(Error::format(
                             path,
                             pos_element,
-                            format!("vertex {i} is not finite ({:?})", p.to_array()),
+                            format!("element {i} is not finite (NaN or infinite)"),
                         ));
                     }
-                    if let Some(m) = coordinate_out_of_range(p.to_array()) {
-                        return Err(Error::format(path, pos_element, format!("vertex {i}: {m}")));
+                    if coordinate_out_of_range(p.to_array()).is_some() {
+                        return Err(Error::format(
+                            path,
+                            pos_element,
+                            format!(
+                                "element {i} is beyond the largest coordinate accepted, \
+                                 {MAX_COORDINATE:e}"
+                            ),
+                        ));
                     }
                     b.push_position(p);
                 }
@@ -688,11 +678,11 @@ fn build_mesh(
                 ((0..n as u64).collect(), pos_element.clone())
             }
         };
-        if let Some(&bad) = indices.iter().find(|&&i| i >= n as u64) {
+        if let Some(k) = indices.iter().position(|&i| i >= n as u64) {
             return Err(Error::format(
                 path,
                 index_element,
-                format!("index {bad} is out of range (the primitive has {n} vertices)"),
+                format!("element {k} is not a vertex of the primitive (it has {n} vertices)"),
             ));
         }
         let material = prim.material();
@@ -708,10 +698,15 @@ fn build_mesh(
             b.push_material(Material { name, color })
         });
         let idx = |k: usize| base + indices[k] as u32;
+        // Indices are checked above; the builder's error would quote an index.
         let mut push = |t: [u32; 3]| {
-            b.push_face(&t, Some(mid))
-                .map(|_| ())
-                .map_err(|e| Error::format(path, &index_element, e.to_string()))
+            b.push_face(&t, Some(mid)).map(|_| ()).map_err(|_| {
+                Error::format(
+                    path,
+                    &index_element,
+                    "a triangle refers to a missing vertex",
+                )
+            })
         };
         let len = indices.len();
         match mode {
@@ -856,7 +851,8 @@ fn read_accessor(
             };
             if target >= count {
                 return Err(format!(
-                    "sparse index {target} is not below the accessor count {count}"
+                    "sparse substitution {s} targets an element beyond the accessor's \
+                     count, {count}"
                 ));
             }
             for c in 0..components {

@@ -13,6 +13,12 @@
 //! file's up axis when the format has one) or, through [`load_file`], a [`Scene`].
 //!
 //! Rules shared by every loader (see `docs/ARCHITECTURE.md`):
+//! - a file named inside another (a glTF buffer, an OBJ `mtllib`, a scene file's mesh)
+//!   is resolved by one rule, [`reference`]'s: relative to the referring file's folder
+//!   and inside its tree, unless [`LoadOptions::allow_outside_references`] is set; every
+//!   file a load reads is recorded ([`Scene::source_files`]);
+//! - messages never quote bytes of a file other than the one being parsed (a glTF
+//!   error names the accessor element, not the value its buffer holds);
 //! - errors name the file and the line (text formats) or the element (binary and
 //!   structured formats: facet, vertex, mesh, primitive, accessor);
 //! - a non-finite coordinate (NaN, infinity, a value overflowing `f64`) is an error,
@@ -40,12 +46,15 @@ pub mod gltf;
 pub mod mtl;
 pub mod obj;
 pub mod ply;
+pub(crate) mod reference;
 pub mod stl;
 pub mod toml_scene;
 
 use std::path::Path;
 
 use glam::DVec3;
+
+use reference::Sources;
 
 use super::{LoadReport, MAX_COORDINATE, MeshBuilder, ObjectDesc, Scene};
 use crate::{Error, Result};
@@ -55,10 +64,8 @@ use crate::{Error, Result};
 /// # Example
 /// ```
 /// use obscura::scene::load::LoadOptions;
-/// let options = LoadOptions {
-///     allow_outside_references: true,
-///     ..LoadOptions::default()
-/// };
+/// let options = LoadOptions::default().with_allow_outside_references(true);
+/// assert!(options.allow_outside_references);
 /// assert!(options.memory_limit.is_none());
 /// ```
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -71,6 +78,15 @@ pub struct LoadOptions {
     /// The memory budget of the load in bytes; `None` takes the default budget of a
     /// run (see the crate's memory budget).
     pub memory_limit: Option<u64>,
+}
+
+impl LoadOptions {
+    /// Sets [`LoadOptions::allow_outside_references`].
+    #[must_use]
+    pub fn with_allow_outside_references(mut self, allow: bool) -> Self {
+        self.allow_outside_references = allow;
+        self
+    }
 }
 
 /// What a mesh file yields before it is placed in a scene.
@@ -99,32 +115,50 @@ fn extension(path: &Path) -> Option<String> {
 /// A file that is empty or holds only white space yields no objects (the caller turns
 /// that into [`Error::EmptyScene`]).
 pub fn load_objects(path: &Path) -> Result<Loaded> {
+    let options = LoadOptions::default();
+    load_objects_in(path, &mut Sources::new(&options))
+}
+
+/// [`load_objects`] within a load: the files it reads are checked by and recorded in
+/// `sources`.
+pub(crate) fn load_objects_in(path: &Path, sources: &mut Sources<'_>) -> Result<Loaded> {
     let ext = extension(path);
     let Some(ext) = ext.filter(|e| MESH_EXTENSIONS.contains(&e.as_str())) else {
         return Err(Error::UnsupportedFormat {
             path: path.to_path_buf(),
         });
     };
-    let bytes = read_file(path)?;
+    let bytes = sources.read(path)?;
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Ok(Loaded::default());
     }
     match ext.as_str() {
-        "obj" => obj::load(path, &bytes),
-        "gltf" | "glb" => gltf::load(path, &bytes),
+        "obj" => obj::load_in(path, &bytes, sources),
+        "gltf" | "glb" => gltf::load_in(path, &bytes, sources),
         "stl" => stl::load(path, bytes),
         "ply" => ply::load(path, &bytes),
         _ => unreachable!("filtered by MESH_EXTENSIONS"),
     }
 }
 
-/// Loads a scene file (`.toml`) or a mesh file into a scene.
+/// Loads a scene file (`.toml`) or a mesh file into a scene, with the default
+/// [`LoadOptions`].
 pub fn load_file(path: &Path) -> Result<Scene> {
-    if extension(path).as_deref() == Some("toml") {
-        return toml_scene::load(path);
-    }
-    let loaded = load_objects(path)?;
-    scene_from(loaded, &path.display().to_string())
+    load_file_with(path, &LoadOptions::default())
+}
+
+/// Loads a scene file (`.toml`) or a mesh file into a scene with `options`. The scene
+/// lists every file read ([`Scene::source_files`]).
+pub fn load_file_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    let mut sources = Sources::new(options);
+    let mut scene = if extension(path).as_deref() == Some("toml") {
+        toml_scene::load_in(path, &mut sources)?
+    } else {
+        let loaded = load_objects_in(path, &mut sources)?;
+        scene_from(loaded, &path.display().to_string())?
+    };
+    scene.set_source_files(sources.into_files());
+    Ok(scene)
 }
 
 /// Places loaded objects in a new scene, refusing an empty result.

@@ -17,6 +17,7 @@
 
 use std::path::Path;
 
+use super::reference::Sources;
 use super::{Tally, clamp_color, read_file};
 use crate::Result;
 
@@ -26,6 +27,21 @@ const DEFAULT_KD: [f32; 3] = [0.8, 0.8, 0.8];
 /// Reads a material library; malformed lines become warnings in `warnings`.
 pub fn load(path: &Path, warnings: &mut Vec<String>) -> Result<Vec<(String, [f32; 3])>> {
     let bytes = read_file(path)?;
+    Ok(parse(
+        path,
+        &String::from_utf8_lossy(super::strip_bom(&bytes)),
+        warnings,
+    ))
+}
+
+/// [`load`] within a load: the library read is recorded in `sources` (its path is
+/// already resolved by the OBJ loader).
+pub(crate) fn load_in(
+    path: &Path,
+    sources: &mut Sources<'_>,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<(String, [f32; 3])>> {
+    let bytes = sources.read(path)?;
     Ok(parse(
         path,
         &String::from_utf8_lossy(super::strip_bom(&bytes)),

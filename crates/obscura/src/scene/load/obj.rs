@@ -10,7 +10,7 @@
 //! Read: `v x y z [w]` (`w` and trailing vertex colours are accepted and ignored), `f`
 //! with `v`, `v/vt`, `v//vn` and `v/vt/vn` references, negative (relative) indices,
 //! `o`, `g`, `usemtl`, `mtllib` (diffuse `Kd` through [`super::mtl`], resolved relative
-//! to the OBJ file), comments (`#` to the end of the line), blank lines, `\` line
+//! to the OBJ file by the rule of [`super::reference`]), comments (`#` to the end of the line), blank lines, `\` line
 //! continuations, CRLF line ends. Ignored: `vt`, `vn`, `vp`, `l`, `p`, `s` and every
 //! other statement (curves, surfaces, display attributes).
 //!
@@ -20,7 +20,10 @@
 //! infinity or an overflowing value), a coordinate beyond
 //! [`MAX_COORDINATE`](crate::scene::MAX_COORDINATE), a face with fewer than three vertices, index 0,
 //! a relative index reaching before the first vertex, an index beyond the file's
-//! vertices (checked once the whole file is read, so forward references are accepted).
+//! vertices (checked once the whole file is read, so forward references are accepted),
+//! an `mtllib` leading out of the OBJ's folder tree (an absolute path, `..`, a symbolic
+//! link: [`Error::OutsideReference`], whether or not a material is used, unless
+//! [`LoadOptions::allow_outside_references`](super::LoadOptions) is set).
 //! Warnings (in the [`LoadReport`](crate::scene::LoadReport)): an unreadable material
 //! library, unknown material names (one warning for all of them, with the first few
 //! names and lines).
@@ -36,8 +39,10 @@ use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::Path;
 
+use super::reference::{Sources, Syntax};
 use super::{
-    Loaded, Tally, coordinate_out_of_range, file_stem, finish_object, mtl, palette_color, strip_bom,
+    LoadOptions, Loaded, Tally, coordinate_out_of_range, file_stem, finish_object, mtl,
+    palette_color, strip_bom,
 };
 use crate::scene::{FaceError, Material, MeshBuilder};
 use crate::{Error, Result};
@@ -68,10 +73,18 @@ struct Parsed {
     libraries: Vec<(String, usize)>,
 }
 
-/// Loads an OBJ file from its bytes (`path` names it in messages and resolves `mtllib`).
+/// Loads an OBJ file from its bytes (`path` names it in messages and resolves `mtllib`),
+/// with the default [`LoadOptions`]: material libraries only inside its folder tree.
 pub fn load(path: &Path, bytes: &[u8]) -> Result<Loaded> {
+    let options = LoadOptions::default();
+    load_in(path, bytes, &mut Sources::new(&options))
+}
+
+/// [`load`] within a load: its options say which libraries may be read, and the
+/// libraries read are recorded in `sources`.
+pub(crate) fn load_in(path: &Path, bytes: &[u8], sources: &mut Sources<'_>) -> Result<Loaded> {
     let parsed = parse(path, bytes)?;
-    build(path, parsed)
+    build(path, parsed, sources)
 }
 
 /// White space between OBJ tokens (a lone `\r` of a CRLF line end included).
@@ -381,9 +394,9 @@ fn parse_reference(tok: &[u8], n: u64) -> std::result::Result<u64, String> {
     }
 }
 
-fn build(path: &Path, p: Parsed) -> Result<Loaded> {
+fn build(path: &Path, p: Parsed, sources: &mut Sources<'_>) -> Result<Loaded> {
     let mut loaded = Loaded::default();
-    let colors = resolve_materials(path, &p, &mut loaded.report.messages);
+    let colors = resolve_materials(path, &p, sources, &mut loaded.report.messages)?;
 
     // Per-vertex remap shared by all objects: `stamp[v]` says which object last
     // mapped `v`, so no O(vertices) reset is needed per object.
@@ -439,22 +452,35 @@ fn build(path: &Path, p: Parsed) -> Result<Loaded> {
 }
 
 /// The colour of each material name used by `usemtl` (`None` when unknown), with a
-/// warning per unreadable library and one for all unknown names.
-fn resolve_materials(path: &Path, p: &Parsed, warnings: &mut Vec<String>) -> Vec<Option<[f32; 3]>> {
-    if p.material_names.is_empty() {
-        return Vec::new();
-    }
-    let dir = path.parent().unwrap_or(Path::new(""));
-    let mut library: HashMap<String, [f32; 3]> = HashMap::new();
-    // A library named again (on another `mtllib` line) is read once: its materials
-    // are already in, first definition first.
-    let mut read: std::collections::HashSet<&str> = std::collections::HashSet::new();
+/// warning per unreadable library and one for all unknown names. Every library is
+/// checked against the folder rule, even when no material is used (and it is not
+/// read): a refused reference is an error.
+fn resolve_materials(
+    path: &Path,
+    p: &Parsed,
+    sources: &mut Sources<'_>,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Option<[f32; 3]>>> {
+    let mut resolved = Vec::with_capacity(p.libraries.len());
+    // A library named again (on another `mtllib` line) is resolved and read once: its
+    // materials are already in, first definition first.
+    let mut named: std::collections::HashSet<&str> = std::collections::HashSet::new();
     for (name, line) in &p.libraries {
-        if !read.insert(name.as_str()) {
+        if !named.insert(name.as_str()) {
             continue;
         }
-        let lib_path = dir.join(name);
-        match mtl::load(&lib_path, warnings) {
+        match sources.resolve(path, &format!("line {line}"), name, Syntax::Path) {
+            Ok(lib) => resolved.push((Ok(lib), *line)),
+            Err(e @ Error::OutsideReference { .. }) => return Err(e),
+            Err(e) => resolved.push((Err(e), *line)),
+        }
+    }
+    if p.material_names.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut library: HashMap<String, [f32; 3]> = HashMap::new();
+    for (lib, line) in resolved {
+        match lib.and_then(|lib_path| mtl::load_in(&lib_path, sources, warnings)) {
             Ok(materials) => {
                 for (m, color) in materials {
                     library.entry(m).or_insert(color);
@@ -481,5 +507,5 @@ fn resolve_materials(path: &Path, p: &Parsed, warnings: &mut Vec<String>) -> Vec
     unknown.finish(warnings, |n| {
         format!("{n} unknown material(s), whose faces use the object colour")
     });
-    colors
+    Ok(colors)
 }

@@ -6,8 +6,12 @@
 //! `[[object]]` tables in file order (a mesh file holding several objects contributes
 //! them all, in its own order), so face ids follow the file too.
 //!
-//! - `mesh = "path"` (relative to the scene file) loads any mesh format of
-//!   [`super::load_objects`]; a file referenced several times is read once and its
+//! - `mesh = "path"` (relative to the scene file, inside its folder tree by the rule of
+//!   [`super::reference`]: an absolute path or one leading out by `..` or a symbolic
+//!   link is an [`Error::OutsideReference`] unless
+//!   [`LoadOptions::allow_outside_references`](super::LoadOptions) is set) loads any
+//!   mesh format of [`super::load_objects`]; a file referenced several times is read
+//!   once and its
 //!   meshes are shared (`Arc`). Each of its objects is placed with the table's
 //!   transform composed with the object's own (`table * own`).
 //! - `primitive = "box" | "sphere" | "torus" | "cone" | "grid"` uses the generators of
@@ -37,7 +41,8 @@ use glam::{DMat4, DVec3};
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::{Loaded, extension, line_of_offset, load_objects, palette_color, read_file};
+use super::reference::{Sources, Syntax};
+use super::{LoadOptions, Loaded, extension, line_of_offset, load_objects_in, palette_color};
 use crate::scene::{Camera, Mesh, ObjectDesc, Projection, Scene, demo};
 use crate::{Error, Result};
 
@@ -112,9 +117,20 @@ const PRIMITIVES: [(&str, &[&str]); 5] = [
     ("grid", &["width", "depth", "nx", "nz"]),
 ];
 
-/// Reads a scene file.
+/// Reads a scene file, with the default [`LoadOptions`]: meshes only inside its folder
+/// tree.
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = read_file(path)?;
+    let options = LoadOptions::default();
+    let mut sources = Sources::new(&options);
+    let mut scene = load_in(path, &mut sources)?;
+    scene.set_source_files(sources.into_files());
+    Ok(scene)
+}
+
+/// [`load`] within a load: its options say which meshes may be read, and the files
+/// read are recorded in `sources`.
+pub(crate) fn load_in(path: &Path, sources: &mut Sources<'_>) -> Result<Scene> {
+    let bytes = sources.read(path)?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let line = line_of_offset(
             &String::from_utf8_lossy(e.as_bytes()),
@@ -132,6 +148,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         dir: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         cache: HashMap::new(),
         primitive_faces: std::cell::Cell::new(0),
+        sources,
     }
     .read(file)
 }
@@ -142,18 +159,20 @@ struct CachedFile {
     up: Option<DVec3>,
 }
 
-struct SceneReader<'a> {
+struct SceneReader<'a, 'o> {
     path: &'a Path,
     /// Finds the line of a span in O(log lines) (counting the newlines before it for
     /// every referenced mesh file made many files quadratic).
     line_starts: super::LineIndex,
+    /// What the load may read and has read.
+    sources: &'a mut Sources<'o>,
     dir: PathBuf,
     cache: HashMap<PathBuf, Arc<CachedFile>>,
     /// Faces of the primitives generated so far (see [`MAX_PRIMITIVE_FACES`]).
     primitive_faces: std::cell::Cell<u64>,
 }
 
-impl SceneReader<'_> {
+impl SceneReader<'_, '_> {
     fn line(&self, span: &Range<usize>) -> usize {
         self.line_starts.line(span.start)
     }
@@ -317,20 +336,33 @@ impl SceneReader<'_> {
                 ));
             }
         }
-        let key = std::fs::canonicalize(&full).unwrap_or_else(|_| full.clone());
-        if let Some(file) = self.cache.get(&key) {
-            return Ok(file.clone());
-        }
         let reference = format!(
             "referenced from {}:{}",
             self.path.display(),
             self.line(&span)
         );
+        let full = self
+            .sources
+            .resolve(
+                self.path,
+                &format!("line {}", self.line(&span)),
+                mesh.get_ref(),
+                Syntax::Path,
+            )
+            .map_err(|e| match e {
+                Error::Format { message, .. } => self.error(&span, message),
+                e @ Error::Io { .. } => with_reference(e, &reference),
+                e => e,
+            })?;
+        let key = std::fs::canonicalize(&full).unwrap_or_else(|_| full.clone());
+        if let Some(file) = self.cache.get(&key) {
+            return Ok(file.clone());
+        }
         let Loaded {
             objects,
             report,
             up,
-        } = load_objects(&full).map_err(|e| with_reference(e, &reference))?;
+        } = load_objects_in(&full, self.sources).map_err(|e| with_reference(e, &reference))?;
         // The mesh file's warnings do not name it (its caller would); here the caller
         // is the scene file, so they get the mesh file's name, the counts of dropped
         // and triangulated faces too.
@@ -636,6 +668,17 @@ fn with_reference(e: Error, reference: &str) -> Error {
             path,
             element,
             message: format!("{message} ({reference})"),
+        },
+        Error::OutsideReference {
+            path,
+            element,
+            reference: written,
+            reason,
+        } => Error::OutsideReference {
+            path,
+            element: format!("{element} ({reference})"),
+            reference: written,
+            reason,
         },
         other => other,
     }
