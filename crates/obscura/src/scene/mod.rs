@@ -185,8 +185,16 @@ impl Scene {
     /// [`Scene::load`] with options: what the scene may read and how much it may
     /// build (see [`load::LoadOptions`]).
     pub fn load_with(spec: &str, options: &load::LoadOptions) -> Result<Scene> {
-        // The options are plumbed through the loaders by the work on issue 21.
-        let _ = options;
+        // The options are plumbed through the loaders by the work on issue 21; the
+        // scene files' memory budget is here.
+        let path = Path::new(spec);
+        if !spec.starts_with("demo:")
+            && path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+        {
+            return load::toml_scene::load_with(path, options);
+        }
         Self::load(spec)
     }
 
