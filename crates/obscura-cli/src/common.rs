@@ -49,6 +49,13 @@ pub struct ViewArgs {
     /// Worker threads, at most 1024 (default: all cores; 1 for single-thread figures).
     #[arg(long, value_name = "N", value_parser = parse_threads, allow_negative_numbers = true)]
     pub threads: Option<usize>,
+    /// Memory budget of the run: 512M, 4G, 1.5GiB or bytes (default: half of the memory
+    /// available). Every structure that grows with the input (frame buffers, bins, BSP
+    /// fragments, octree nodes, a scene file's placed faces...) is checked against it
+    /// and refused with its name rather than exhausting memory. Given, it also replaces
+    /// the BSP's default cap of 2 million fragments (a few seconds of building).
+    #[arg(long, value_name = "SIZE", value_parser = obscura::budget::parse_size)]
+    pub memory_limit: Option<u64>,
 }
 
 /// Options that tune particular algorithms.
@@ -77,6 +84,18 @@ impl AlgoArgs {
             .with_bounds(self.bounds)
             .with_octree_depth(self.octree_depth)
             .with_bsp(BspOptions::default().with_traversal(self.bsp_traversal))
+    }
+
+    /// [`AlgoArgs::options`] with the memory budget of `--memory-limit`, which, given,
+    /// bounds the BSP tree by its bytes instead of the default fragment count.
+    pub fn options_with_budget(&self, memory_limit: Option<u64>) -> RenderOptions {
+        let options = self.options().with_memory_limit(memory_limit);
+        if memory_limit.is_some() {
+            let bsp = options.bsp.with_max_fragments(usize::MAX);
+            options.with_bsp(bsp)
+        } else {
+            options
+        }
     }
 }
 
@@ -194,7 +213,7 @@ impl ViewArgs {
             .clone()
             .unwrap_or_else(|| "demo:default".to_string());
         let start = Instant::now();
-        let scene = Scene::load(&spec)?;
+        let scene = Scene::load_with(&spec, &self.load_options())?;
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         scene.ensure_not_empty(&spec)?;
         for w in scene.report().warnings() {
@@ -288,6 +307,13 @@ impl ViewArgs {
         Ok(cam)
     }
 
+    /// Load options from the flags (the memory budget).
+    pub fn load_options(&self) -> obscura::scene::load::LoadOptions {
+        let mut options = obscura::scene::load::LoadOptions::default();
+        options.memory_limit = self.memory_limit;
+        options
+    }
+
     /// Pipeline options from the flags.
     pub fn prepare_options(&self) -> PrepareOptions {
         let mode = if self.no_backface {
@@ -295,7 +321,9 @@ impl ViewArgs {
         } else {
             BackfaceMode::Closed
         };
-        PrepareOptions::default().with_backface(mode)
+        PrepareOptions::default()
+            .with_backface(mode)
+            .with_memory_limit(self.memory_limit)
     }
 
     /// Runs `f` with rayon's current pool of the requested size.
@@ -317,6 +345,35 @@ impl ViewArgs {
             .build()
             .map_err(|e| Error::option("--threads", e.to_string()))?;
         Ok(pool.install(f))
+    }
+}
+
+/// The CLI's flag for the memory budget, named by budget errors instead of the
+/// library's `memory_limit`.
+pub const MEMORY_LIMIT_FLAG: &str = "--memory-limit";
+
+/// An error as the CLI shows it: a budget error names `--memory-limit` instead of the
+/// library's `memory_limit`, and the BSP's fragment cap says how the flag lifts it.
+pub fn cli_error(e: Error) -> Error {
+    match e {
+        Error::InvalidOption { option, reason } if option == "bsp fragments" => Error::InvalidOption {
+            option,
+            reason: format!(
+                "{reason} (in the CLI: give --memory-limit to bound the tree by its bytes \
+                 instead of this count)"
+            ),
+        },
+        other => other.with_budget_option(MEMORY_LIMIT_FLAG),
+    }
+}
+
+/// Whether an error is a structure over the memory budget, or the BSP's fragment cap
+/// (`compare` and `bench` skip that algorithm and go on).
+pub fn is_over_budget(e: &Error) -> bool {
+    match e {
+        Error::Budget { .. } => true,
+        Error::InvalidOption { option, .. } => option == "bsp fragments",
+        _ => false,
     }
 }
 

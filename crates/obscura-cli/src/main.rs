@@ -52,7 +52,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            errln!("error: {e}");
+            errln!("error: {}", common::cli_error(e));
             ExitCode::FAILURE
         }
     }

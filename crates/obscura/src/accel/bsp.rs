@@ -125,9 +125,12 @@ pub struct BspOptions {
     /// The most fragments a build may make (every polygon, and two per split) before it
     /// gives up with an error: polygons
     /// that cut each other everywhere (random or interpenetrating geometry) multiply
-    /// (the 10,000 large triangles of `demo:triangles` make 14 million fragments,
-    /// 3.2 GB; 30,000 such triangles ran out of memory). Each costs about 230 bytes: the
-    /// default, 16 million, about 3.7 GB.
+    /// (the 10,000 large triangles of `demo:triangles` would make 14 million
+    /// fragments; 5,000 random large triangles made 2 million in 6 s). A fragment of
+    /// such a tree takes about 500 bytes, not the 230 of a fragment alone: each copies
+    /// the list of cuts that made it, which grows with the depth. The default, 2
+    /// million, is about 1 GB and a few seconds of building; the memory budget
+    /// ([`BspOptions::memory_limit`]) bounds the bytes whatever the count.
     pub max_fragments: usize,
     /// The memory budget of the build in bytes (see [`crate::budget`]): the tree's
     /// vectors (fragments, their vertices and cuts, nodes) and the sets waiting to be
@@ -150,7 +153,7 @@ impl BspOptions {
         seed: 0x0B5C_0BA5_EED5,
         tolerance: 1e-9,
         axis_planes: true,
-        max_fragments: 16_000_000,
+        max_fragments: 2_000_000,
         memory_limit: None,
     };
 

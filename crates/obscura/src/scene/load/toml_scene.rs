@@ -192,10 +192,17 @@ impl SceneReader<'_> {
     fn read(mut self, file: SceneFile) -> Result<Scene> {
         let mut scene = Scene::new();
         let mut file_up = None;
+        // Every table's objects first, counted (meshes are shared, so this is cheap),
+        // so that totals over the cap or the budget are refused before any object is
+        // added (adding checks and bounds every vertex of every placement).
+        let mut placed = Vec::with_capacity(file.objects.len());
         for (k, spec) in file.objects.iter().enumerate() {
             let span = spec.span();
             let descs = self.objects_of(spec.get_ref(), &span, k, &mut scene, &mut file_up)?;
             self.count_placed(&descs, &span)?;
+            placed.push((span, descs));
+        }
+        for (span, descs) in placed {
             for d in descs {
                 let name = d.name.clone();
                 scene.add(d).map_err(|e| {
