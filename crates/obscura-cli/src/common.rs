@@ -67,7 +67,8 @@ pub struct AlgoArgs {
     /// Octree depth for the octree algorithm: voxels are 2^DEPTH on a side (0 to 10).
     /// Each level multiplies the octree's memory and build time by about 4: depth 8 on
     /// the 1M-triangle demo:sphere takes 12 MB, but depth 10 on a scene of many large
-    /// overlapping triangles (demo:triangles) takes minutes and over 5 GB.
+    /// overlapping triangles (demo:triangles) would take minutes and over 5 GB: a tree
+    /// whose estimate passes the memory budget (--memory-limit) is refused up front.
     #[arg(long, value_name = "DEPTH", default_value_t = 7, value_parser = parse_octree_depth,
           allow_negative_numbers = true)]
     pub octree_depth: u32,
@@ -356,13 +357,15 @@ pub const MEMORY_LIMIT_FLAG: &str = "--memory-limit";
 /// library's `memory_limit`, and the BSP's fragment cap says how the flag lifts it.
 pub fn cli_error(e: Error) -> Error {
     match e {
-        Error::InvalidOption { option, reason } if option == "bsp fragments" => Error::InvalidOption {
-            option,
-            reason: format!(
-                "{reason} (in the CLI: give --memory-limit to bound the tree by its bytes \
+        Error::InvalidOption { option, reason } if option == "bsp fragments" => {
+            Error::InvalidOption {
+                option,
+                reason: format!(
+                    "{reason} (in the CLI: give --memory-limit to bound the tree by its bytes \
                  instead of this count)"
-            ),
-        },
+                ),
+            }
+        }
         other => other.with_budget_option(MEMORY_LIMIT_FLAG),
     }
 }

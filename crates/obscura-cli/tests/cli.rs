@@ -717,13 +717,25 @@ fn compare_skips_an_algorithm_over_the_memory_budget_and_writes_the_others() {
     }
     assert!(dir.join("compare.png").exists());
     let json: String = std::fs::read_to_string(dir.join("c.json")).unwrap();
-    assert!(json.contains("\"skipped\"") && json.contains("BSP fragments"), "{json}");
+    assert!(
+        json.contains("\"skipped\"") && json.contains("BSP fragments"),
+        "{json}"
+    );
     assert_eq!(json.matches("\"differing_pixels\"").count(), 3, "{json}");
     // The same budget stops `render` with the structure and the flag named.
     refused(
         &dir,
         &[(
-            &["render", "tris.obj", "--size", "64x48", "--algo", "bsp", "--memory-limit", "2M"],
+            &[
+                "render",
+                "tris.obj",
+                "--size",
+                "64x48",
+                "--algo",
+                "bsp",
+                "--memory-limit",
+                "2M",
+            ],
             &["BSP fragments", "--memory-limit"],
         )],
     );
@@ -731,7 +743,10 @@ fn compare_skips_an_algorithm_over_the_memory_budget_and_writes_the_others() {
     refused(
         &dir,
         &[
-            (&["render", "--memory-limit", "lots"], &["--memory-limit", "lots"]),
+            (
+                &["render", "--memory-limit", "lots"],
+                &["--memory-limit", "lots"],
+            ),
             (&["render", "--memory-limit", "0"], &["--memory-limit"]),
         ],
     );

@@ -334,7 +334,18 @@ mod tests {
         assert_eq!(parse_size("4g").unwrap(), 4 << 30);
         assert_eq!(parse_size("0.5MiB").unwrap(), 1 << 19);
         assert_eq!(parse_size("3MB").unwrap(), 3_000_000);
-        for bad in ["", "G", "0", "0.1", "1.2.3M", "5X", "-3", "nan", "1e3", "99999999999T"] {
+        for bad in [
+            "",
+            "G",
+            "0",
+            "0.1",
+            "1.2.3M",
+            "5X",
+            "-3",
+            "nan",
+            "1e3",
+            "99999999999T",
+        ] {
             assert!(parse_size(bad).is_err(), "{bad}");
         }
     }

@@ -5,9 +5,7 @@
 use std::path::PathBuf;
 
 use obscura::scene::load::LoadOptions;
-use obscura::scene::load::toml_scene::{
-    MAX_PLACED_FACES, PLACED_FACE_BYTES, PLACED_VERTEX_BYTES,
-};
+use obscura::scene::load::toml_scene::{MAX_PLACED_FACES, PLACED_FACE_BYTES, PLACED_VERTEX_BYTES};
 use obscura::scene::random::random_triangles;
 use obscura::scene::{Scene, Viewport, demo};
 use obscura::surface::{Algorithm, RenderOptions, render};
@@ -60,13 +58,19 @@ fn bsp_on_random_large_triangles_stops_at_the_budget_naming_its_fragments() {
     assert!(bytes < 10 * limit, "{bytes}");
     // More fragments than polygons: splitting had begun.
     assert!(count > 400, "{count}");
-    let text = render(Algorithm::Bsp, &view, &options).unwrap_err().to_string();
+    let text = render(Algorithm::Bsp, &view, &options)
+        .unwrap_err()
+        .to_string();
     assert!(
         text.contains("BSP fragments") && text.contains("memory_limit") && text.contains("2.0 MiB"),
         "{text}"
     );
     // The other algorithms render the same view within the same budget.
-    for a in [Algorithm::ZBuffer, Algorithm::Scanline, Algorithm::RaycastBvh] {
+    for a in [
+        Algorithm::ZBuffer,
+        Algorithm::Scanline,
+        Algorithm::RaycastBvh,
+    ] {
         assert!(render(a, &view, &options).is_ok(), "{a}");
     }
 }
@@ -205,7 +209,9 @@ fn scene_file_placements_over_the_face_cap_are_refused_at_their_line() {
     let line = 2 + 3 * (crossing - 1);
     match &e {
         Error::Parse {
-            path, line: l, message,
+            path,
+            line: l,
+            message,
         } => {
             assert_eq!(path, &spec);
             assert_eq!(*l, line, "{e}");

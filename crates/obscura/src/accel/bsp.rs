@@ -639,11 +639,7 @@ impl BspTree {
             self.nodes[n as usize] = node;
             let bytes = self.bytes() + waiting + stack.capacity() as u64 * 32;
             if bytes > budget.limit() {
-                return Err(budget.exceeded(
-                    "BSP fragments",
-                    self.fragments.len() as u64,
-                    bytes,
-                ));
+                return Err(budget.exceeded("BSP fragments", self.fragments.len() as u64, bytes));
             }
             if self.fragments.len() > options.max_fragments {
                 return Err(Error::option(

@@ -334,11 +334,9 @@ pub fn check_budget(
 ) -> Result<()> {
     let budget = options.budget();
     let pixels = view.viewport().pixel_count() as u64;
-    let painted_keys = matches!(
-        algorithm,
-        Algorithm::DepthSort | Algorithm::DepthSortMatrix
-    ) || (algorithm == Algorithm::Bsp
-        && options.bsp.traversal == crate::accel::bsp::BspTraversal::BackToFront);
+    let painted_keys = matches!(algorithm, Algorithm::DepthSort | Algorithm::DepthSortMatrix)
+        || (algorithm == Algorithm::Bsp
+            && options.bsp.traversal == crate::accel::bsp::BspTraversal::BackToFront);
     let per_pixel = 8 + if painted_keys { 8 } else { 0 };
     budget.check_items(FRAME_STRUCTURE, pixels, per_pixel)?;
     // The ray casters build on the scene's triangles, the others on the view's.

@@ -48,7 +48,10 @@
 //!   [`crate::accel::octree`]); per ray O(depth) nodes per voxel crossed until the first
 //!   surface voxel. The stats give `nodes_visited_per_ray`.
 //! - Memory: 16 bytes per node (`bytes_per_node`, `memory_bytes` in the stats); the
-//!   default depth 7 (128 voxels on a side) takes about 2 MB for demo:default.
+//!   default depth 7 (128 voxels on a side) takes about 2 MB for demo:default. Before
+//!   building, [`check_budget`] estimates the nodes and the cells' triangle lists from
+//!   the depth and the scene's triangles and refuses a tree over the memory budget
+//!   ([`RenderOptions::memory_limit`]).
 //!
 //! Rows of the image are traced in parallel with the `parallel` feature.
 
@@ -168,15 +171,21 @@ fn estimate(scene: &crate::Scene, depth: u32) -> (u64, u64) {
     for level in 0..=depth {
         // Voxels of this level are 2^(depth - level) leaf voxels on a side.
         let scale = f64::from(1u32 << (depth - level).min(30));
-        let met = 3f64.sqrt() * area / (scale * scale) + 4.0 * perimeter / scale
-            + 8.0 * triangles as f64;
+        let met =
+            3f64.sqrt() * area / (scale * scale) + 4.0 * perimeter / scale + 8.0 * triangles as f64;
         pairs += met;
         nodes += 8.0 * met.min(8f64.powi(level as i32));
     }
     let bytes = pairs * 4.0
         + nodes * std::mem::size_of::<crate::accel::octree::Node>() as f64
         + triangles as f64 * 84.0;
-    let clamp = |x: f64| if x.is_finite() { x.min(u64::MAX as f64) as u64 } else { u64::MAX };
+    let clamp = |x: f64| {
+        if x.is_finite() {
+            x.min(u64::MAX as f64) as u64
+        } else {
+            u64::MAX
+        }
+    };
     (clamp(bytes), clamp(nodes))
 }
 

@@ -65,7 +65,9 @@
 //! - Complexity: O(P log P) for the sort and O(P k) for k overlapping candidates per
 //!   polygon on ordinary scenes; O(P^2) comparisons at worst (seed 000), and each
 //!   split adds a polygon. A split budget (`8 P + 1024`) guarantees termination on
-//!   degenerate input; past it (or when rounding prevents a split), a conflict is
+//!   degenerate input, and the memory budget ([`RenderOptions::memory_limit`]) bounds
+//!   the pieces' bytes (each piece copies the cuts that made it): a split that would
+//!   pass it ends the render with [`crate::Error::Budget`]; past it (or when rounding prevents a split), a conflict is
 //!   painted as found and counted in `unresolved`, and from then on every polygon is
 //!   painted depth-tested against what is painted (the z-buffer's test): those
 //!   painted before lie behind all that remain, so the image is still the

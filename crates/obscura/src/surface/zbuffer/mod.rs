@@ -137,7 +137,10 @@ pub const BUDGET_STRUCTURE: &str = "z-buffer big-polygon bins";
 fn check_budget(view: &PreparedView<'_>, options: &RenderOptions, bands: u32) -> Result<()> {
     let budget = options.budget();
     let vp = view.viewport();
-    let (tiles_x, tiles_y) = (vp.width.div_ceil(fast::TILE), vp.height.div_ceil(fast::TILE));
+    let (tiles_x, tiles_y) = (
+        vp.width.div_ceil(fast::TILE),
+        vp.height.div_ceil(fast::TILE),
+    );
     let bands_u = u64::from(bands);
     let per_band = fast::BIG_ENTRY_BYTES + 4;
     let worst = u64::from(tiles_x) * u64::from(tiles_y) * 4 + bands_u * per_band;
