@@ -192,6 +192,8 @@ fn cgroup_room() -> Option<u64> {
 
 /// The least of the address-space and data-segment limits (`ulimit -v`, `-d`).
 #[cfg(unix)]
+// `rlim_t` is `u64` on Linux but not on every Unix.
+#[allow(clippy::unnecessary_cast)]
 fn rlimit() -> Option<u64> {
     let get = |resource| {
         let mut r = libc::rlimit {
