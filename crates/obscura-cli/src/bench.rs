@@ -213,7 +213,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     );
     let mut results: Vec<(Algorithm, Vec<(usize, f64)>)> =
         algos.iter().map(|&a| (a, Vec::new())).collect();
-    let options = args.tuning.options();
+    let options = args.tuning.options_with_budget(args.view.memory_limit);
+    // Per algorithm, the sizes skipped for the memory budget, with the reason.
+    let mut skipped: Vec<(Algorithm, usize, String)> = Vec::new();
     for &n in &sizes {
         // No scene is built for a size that every algorithm skips.
         if !results
@@ -240,7 +242,15 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             };
             let mut best = match measure() {
                 Ok(t) => t,
+                Err(e) if crate::common::is_over_budget(&e) => {
+                    let reason = crate::common::cli_error(e).to_string();
+                    errln!("{algorithm} at {n} faces: skipped, over the memory budget: {reason}");
+                    points.push((n, f64::NAN));
+                    skipped.push((*algorithm, n, reason));
+                    continue;
+                }
                 Err(e) => {
+                    let e = crate::common::cli_error(e);
                     errln!("{algorithm} at {n} faces: {e}");
                     points.push((n, f64::NAN));
                     continue;
@@ -249,7 +259,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             // Small runs are noisy: keep the best of a few.
             let mut repeats = 0;
             while best < 200.0 && repeats < 4 {
-                best = best.min(measure()?);
+                match measure() {
+                    Ok(t) => best = best.min(t),
+                    Err(_) => break,
+                }
                 repeats += 1;
             }
             points.push((n, best));
@@ -268,6 +281,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         for n in &sizes {
             table += &match points.iter().find(|p| p.0 == *n) {
                 Some((_, t)) if t.is_finite() => format!(" {t:>9.1}"),
+                Some(_) if skipped.iter().any(|s| s.0 == *algorithm && s.1 == *n) => {
+                    format!(" {:>9}", "skipped")
+                }
                 Some(_) => format!(" {:>9}", "error"),
                 None => format!(" {:>9}", "-"),
             };
@@ -283,6 +299,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "algorithm": algorithm.name(),
             "points": valid.iter().map(|(n, t)| json!({"faces": n, "ms": t})).collect::<Vec<_>>(),
             "exponent": e,
+            "skipped": skipped
+                .iter()
+                .filter(|s| s.0 == *algorithm)
+                .map(|s| json!({"faces": s.1, "reason": s.2}))
+                .collect::<Vec<_>>(),
         }));
     }
     if args.json.is_some() {
@@ -293,6 +314,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         })?;
     }
     outputs.commit()?;
+    for (algorithm, n, reason) in &skipped {
+        table += &format!("skipped: {algorithm} at {n} faces: {reason}\n");
+    }
     out!("{table}");
     Ok(())
 }

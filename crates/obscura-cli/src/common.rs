@@ -55,6 +55,13 @@ pub struct ViewArgs {
     /// file that refers to it.
     #[arg(long)]
     pub allow_outside_references: bool,
+    /// Memory budget of the run: 512M, 4G, 1.5GiB or bytes (default: half of the memory
+    /// available). Every structure that grows with the input (frame buffers, bins, BSP
+    /// fragments, octree nodes, a scene file's placed faces...) is checked against it
+    /// and refused with its name rather than exhausting memory. Given, it also replaces
+    /// the BSP's default cap of 2 million fragments (a few seconds of building).
+    #[arg(long, value_name = "SIZE", value_parser = obscura::budget::parse_size)]
+    pub memory_limit: Option<u64>,
 }
 
 /// Options that tune particular algorithms.
@@ -66,7 +73,8 @@ pub struct AlgoArgs {
     /// Octree depth for the octree algorithm: voxels are 2^DEPTH on a side (0 to 10).
     /// Each level multiplies the octree's memory and build time by about 4: depth 8 on
     /// the 1M-triangle demo:sphere takes 12 MB, but depth 10 on a scene of many large
-    /// overlapping triangles (demo:triangles) takes minutes and over 5 GB.
+    /// overlapping triangles (demo:triangles) would take minutes and over 5 GB: a tree
+    /// whose estimate passes the memory budget (--memory-limit) is refused up front.
     #[arg(long, value_name = "DEPTH", default_value_t = 7, value_parser = parse_octree_depth,
           allow_negative_numbers = true)]
     pub octree_depth: u32,
@@ -83,6 +91,18 @@ impl AlgoArgs {
             .with_bounds(self.bounds)
             .with_octree_depth(self.octree_depth)
             .with_bsp(BspOptions::default().with_traversal(self.bsp_traversal))
+    }
+
+    /// [`AlgoArgs::options`] with the memory budget of `--memory-limit`, which, given,
+    /// bounds the BSP tree by its bytes instead of the default fragment count.
+    pub fn options_with_budget(&self, memory_limit: Option<u64>) -> RenderOptions {
+        let options = self.options().with_memory_limit(memory_limit);
+        if memory_limit.is_some() {
+            let bsp = options.bsp.with_max_fragments(usize::MAX);
+            options.with_bsp(bsp)
+        } else {
+            options
+        }
     }
 }
 
@@ -200,9 +220,7 @@ impl ViewArgs {
             .clone()
             .unwrap_or_else(|| "demo:default".to_string());
         let start = Instant::now();
-        let options = obscura::scene::load::LoadOptions::default()
-            .with_allow_outside_references(self.allow_outside_references);
-        let scene = Scene::load_with(&spec, &options)?;
+        let scene = Scene::load_with(&spec, &self.load_options())?;
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         scene.ensure_not_empty(&spec)?;
         for w in scene.report().warnings() {
@@ -296,6 +314,14 @@ impl ViewArgs {
         Ok(cam)
     }
 
+    /// Load options from the flags (the memory budget).
+    pub fn load_options(&self) -> obscura::scene::load::LoadOptions {
+        let mut options = obscura::scene::load::LoadOptions::default()
+            .with_allow_outside_references(self.allow_outside_references);
+        options.memory_limit = self.memory_limit;
+        options
+    }
+
     /// Pipeline options from the flags.
     pub fn prepare_options(&self) -> PrepareOptions {
         let mode = if self.no_backface {
@@ -303,7 +329,9 @@ impl ViewArgs {
         } else {
             BackfaceMode::Closed
         };
-        PrepareOptions::default().with_backface(mode)
+        PrepareOptions::default()
+            .with_backface(mode)
+            .with_memory_limit(self.memory_limit)
     }
 
     /// Runs `f` with rayon's current pool of the requested size.
@@ -344,6 +372,37 @@ pub fn message(e: &Error) -> String {
             path.display()
         ),
         e => e.to_string(),
+    }
+}
+
+/// The CLI's flag for the memory budget, named by budget errors instead of the
+/// library's `memory_limit`.
+pub const MEMORY_LIMIT_FLAG: &str = "--memory-limit";
+
+/// An error as the CLI shows it: a budget error names `--memory-limit` instead of the
+/// library's `memory_limit`, and the BSP's fragment cap says how the flag lifts it.
+pub fn cli_error(e: Error) -> Error {
+    match e {
+        Error::InvalidOption { option, reason } if option == "bsp fragments" => {
+            Error::InvalidOption {
+                option,
+                reason: format!(
+                    "{reason} (in the CLI: give --memory-limit to bound the tree by its bytes \
+                 instead of this count)"
+                ),
+            }
+        }
+        other => other.with_budget_option(MEMORY_LIMIT_FLAG),
+    }
+}
+
+/// Whether an error is a structure over the memory budget, or the BSP's fragment cap
+/// (`compare` and `bench` skip that algorithm and go on).
+pub fn is_over_budget(e: &Error) -> bool {
+    match e {
+        Error::Budget { .. } => true,
+        Error::InvalidOption { option, .. } => option == "bsp fragments",
+        _ => false,
     }
 }
 

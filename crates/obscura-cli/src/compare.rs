@@ -44,10 +44,18 @@ pub struct CompareArgs {
     pub naming: OutputArgs,
 }
 
+/// Why an algorithm has no frame.
+enum Failure {
+    /// Over the memory budget: skipped, the others go on.
+    Skipped(String),
+    /// Any other error.
+    Error(String),
+}
+
 /// One row of the table.
 struct Row {
     algorithm: Algorithm,
-    result: std::result::Result<(Frame, Stats, f64), String>,
+    result: std::result::Result<(Frame, Stats, f64), Failure>,
 }
 
 /// The stats worth a column: everything but the time, compactly.
@@ -137,11 +145,22 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         let mut rows = Vec::new();
         for &algorithm in &algos {
             let (pb, progress) = progress_bar(algorithm.name());
-            let options = args.tuning.options().with_progress(progress);
+            let options = args
+                .tuning
+                .options_with_budget(args.view.memory_limit)
+                .with_progress(progress);
             let start = Instant::now();
             let result = render(algorithm, &view, &options)
                 .map(|(f, s)| (f, s, start.elapsed().as_secs_f64() * 1e3))
-                .map_err(|e| e.to_string());
+                .map_err(|e| {
+                    let skipped = crate::common::is_over_budget(&e);
+                    let text = crate::common::cli_error(e).to_string();
+                    if skipped {
+                        Failure::Skipped(text)
+                    } else {
+                        Failure::Error(text)
+                    }
+                });
             pb.finish_and_clear();
             rows.push(Row { algorithm, result });
         }
@@ -150,7 +169,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
 
     let reference = match &rows[0].result {
         Ok((f, _, _)) => f,
-        Err(e) => {
+        Err(Failure::Skipped(e) | Failure::Error(e)) => {
             return Err(obscura::Error::option(
                 "--algos",
                 format!("the z-buffer failed: {e}"),
@@ -195,7 +214,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                     "agree_percent": agree, "stats": stats,
                 }));
             }
-            Err(e) => {
+            Err(Failure::Error(e)) => {
                 report += &format!(
                     "{:<18} {:>10} {:>10} {:>9}  error: {e}\n",
                     row.algorithm.name(),
@@ -204,6 +223,16 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                     "-"
                 );
                 table.push(json!({ "algorithm": row.algorithm.name(), "error": e }));
+            }
+            Err(Failure::Skipped(e)) => {
+                report += &format!(
+                    "{:<18} {:>10} {:>10} {:>9}  skipped: {e}\n",
+                    row.algorithm.name(),
+                    "-",
+                    "-",
+                    "-"
+                );
+                table.push(json!({ "algorithm": row.algorithm.name(), "skipped": e }));
             }
         }
     }

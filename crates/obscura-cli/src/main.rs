@@ -53,7 +53,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            errln!("error: {}", common::message(&e));
+            errln!("error: {}", common::message(&common::cli_error(e)));
             ExitCode::FAILURE
         }
     }

@@ -85,7 +85,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = &loaded.scene;
     let viewport = args.view.viewport(scene)?;
     let camera = args.view.camera(scene, viewport)?;
-    let mut options = args.tuning.options();
+    let mut options = args.tuning.options_with_budget(args.view.memory_limit);
     // Slow algorithms on big scenes (brute-force ray casting of a million triangles
     // takes hours) show how far they are, when someone is watching.
     let bar = std::io::stderr()

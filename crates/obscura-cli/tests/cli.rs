@@ -1015,3 +1015,97 @@ fn an_interrupted_run_leaves_no_temporary_files() {
         std::fs::remove_dir_all(&dir).ok();
     }
 }
+
+/// Writes `n` large random triangles (a linear congruential generator, so the file is
+/// the same every run) as an OBJ: they cut each other everywhere.
+fn write_random_large_triangles(path: &PathBuf, n: usize) {
+    let mut state: u64 = 0x2545_F491_4F6C_DD1D;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64) * 20.0 - 10.0
+    };
+    let mut s = String::new();
+    for _ in 0..3 * n {
+        s += &format!("v {} {} {}\n", next(), next(), next());
+    }
+    for t in 0..n {
+        s += &format!("f {} {} {}\n", 3 * t + 1, 3 * t + 2, 3 * t + 3);
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+#[test]
+fn compare_skips_an_algorithm_over_the_memory_budget_and_writes_the_others() {
+    let dir = tempdir("compare-budget");
+    write_random_large_triangles(&dir.join("tris.obj"), 600);
+    let o = obscura_within(
+        &[
+            "compare",
+            "tris.obj",
+            "--size",
+            "64x48",
+            "--algos",
+            "scanline,bsp,raycast-bvh",
+            "--memory-limit",
+            "2M",
+            "--json",
+            "c.json",
+        ],
+        &dir,
+        60,
+    );
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    let bsp = t
+        .lines()
+        .find(|l| l.starts_with("bsp "))
+        .unwrap_or_else(|| panic!("no bsp row in {t}"));
+    assert!(
+        bsp.contains("skipped") && bsp.contains("BSP fragments") && bsp.contains("--memory-limit"),
+        "{bsp}"
+    );
+    assert!(!bsp.contains("memory_limit"), "{bsp}");
+    // The others ran and agree with the z-buffer.
+    for a in ["zbuffer ", "scanline ", "raycast-bvh "] {
+        let row = t.lines().find(|l| l.starts_with(a)).unwrap();
+        assert!(!row.contains("skipped") && !row.contains("error"), "{row}");
+    }
+    assert!(dir.join("compare.png").exists());
+    let json: String = std::fs::read_to_string(dir.join("c.json")).unwrap();
+    assert!(
+        json.contains("\"skipped\"") && json.contains("BSP fragments"),
+        "{json}"
+    );
+    assert_eq!(json.matches("\"differing_pixels\"").count(), 3, "{json}");
+    // The same budget stops `render` with the structure and the flag named.
+    refused(
+        &dir,
+        &[(
+            &[
+                "render",
+                "tris.obj",
+                "--size",
+                "64x48",
+                "--algo",
+                "bsp",
+                "--memory-limit",
+                "2M",
+            ],
+            &["BSP fragments", "--memory-limit"],
+        )],
+    );
+    // Sizes are checked at parsing.
+    refused(
+        &dir,
+        &[
+            (
+                &["render", "--memory-limit", "lots"],
+                &["--memory-limit", "lots"],
+            ),
+            (&["render", "--memory-limit", "0"], &["--memory-limit"]),
+        ],
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -105,6 +105,44 @@ pub enum Error {
         /// Why it is refused.
         reason: String,
     },
+    /// A structure whose size depends on the input would exceed the memory budget of
+    /// the run (see [`crate::budget`]): estimated before it was allocated, or counted
+    /// while it grew.
+    #[error("{}", budget_message(at.as_deref(), structure, *count, *bytes, *limit, option))]
+    Budget {
+        /// The structure, e.g. `BSP fragments` or `octree nodes`.
+        structure: String,
+        /// How many of its items it reached or would reach.
+        count: u64,
+        /// The bytes it would take (an estimate or the count so far).
+        bytes: u64,
+        /// The budget in bytes.
+        limit: u64,
+        /// The option that raises the budget: `memory_limit` in the library, the flag
+        /// in the CLI.
+        option: String,
+        /// Where the input asks for the structure (a file and line), when known.
+        at: Option<String>,
+    },
+}
+
+/// The message of an [`Error::Budget`].
+fn budget_message(
+    at: Option<&str>,
+    structure: &str,
+    count: u64,
+    bytes: u64,
+    limit: u64,
+    option: &str,
+) -> String {
+    let b = crate::budget::readable_bytes;
+    let place = at.map(|a| format!("{a}: ")).unwrap_or_default();
+    format!(
+        "{place}{structure}: {count} would take {} (or more), over the memory budget of {}; \
+         raise the budget with {option}, or reduce the input",
+        b(bytes),
+        b(limit)
+    )
 }
 
 impl Error {
@@ -143,6 +181,55 @@ impl Error {
         Error::InvalidOption {
             option: option.into(),
             reason: reason.into(),
+        }
+    }
+}
+
+impl Error {
+    /// A budget error naming another option (the CLI's flag instead of the library's
+    /// field) and, when given, the place in the input; other errors unchanged.
+    #[must_use]
+    pub fn with_budget_option(self, flag: &str) -> Self {
+        match self {
+            Error::Budget {
+                structure,
+                count,
+                bytes,
+                limit,
+                at,
+                ..
+            } => Error::Budget {
+                structure,
+                count,
+                bytes,
+                limit,
+                option: flag.to_string(),
+                at,
+            },
+            other => other,
+        }
+    }
+
+    /// A budget error placed in the input (`file:line`); other errors unchanged.
+    #[must_use]
+    pub fn budget_at(self, place: String) -> Self {
+        match self {
+            Error::Budget {
+                structure,
+                count,
+                bytes,
+                limit,
+                option,
+                ..
+            } => Error::Budget {
+                structure,
+                count,
+                bytes,
+                limit,
+                option,
+                at: Some(place),
+            },
+            other => other,
         }
     }
 }

@@ -30,6 +30,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod budget;
 pub mod clip;
 pub mod cpu;
 pub mod cull;

@@ -46,6 +46,10 @@ pub struct PrepareOptions {
     pub backface: BackfaceMode,
     /// Whether whole objects are culled by their bounding sphere and box.
     pub frustum_cull_objects: bool,
+    /// The memory budget of the prepared view in bytes (see [`crate::budget`]):
+    /// [`prepare`] estimates its vertices and polygons before it allocates them and
+    /// refuses a view over the budget. `None`: the default budget.
+    pub memory_limit: Option<u64>,
 }
 
 impl PrepareOptions {
@@ -53,7 +57,15 @@ impl PrepareOptions {
     pub const DEFAULT: PrepareOptions = PrepareOptions {
         backface: BackfaceMode::Closed,
         frustum_cull_objects: true,
+        memory_limit: None,
     };
+
+    /// These options with a memory budget in bytes (`None`: the default).
+    #[must_use]
+    pub fn with_memory_limit(mut self, memory_limit: Option<u64>) -> Self {
+        self.memory_limit = memory_limit;
+        self
+    }
 
     /// These options with another back-face mode.
     #[must_use]
@@ -701,6 +713,7 @@ pub fn prepare<'s>(
         vertex_total += scene.objects()[k].mesh.positions().len();
     }
     bases.push(vertex_total as u32);
+    check_budget(scene, &visible, vertex_total, options)?;
     let (mut vertices, codes) = passes::transform_vertices(scene, &visible, &bases, &t, threads);
     confirm_inside(scene, &mut visible, &bases, &codes);
     stats.push(
@@ -761,6 +774,34 @@ pub fn prepare<'s>(
         objects: out.objects,
         stats,
     })
+}
+
+/// The structure named by the prepared view's budget errors.
+pub const BUDGET_STRUCTURE: &str = "prepared view (vertices and polygons)";
+
+/// Refuses, before anything is allocated, a prepared view whose visible objects'
+/// vertices and polygons would exceed the budget of `options`: per vertex its view
+/// vertex and outcode, per polygon its offsets, face and object ids and indices, with
+/// room for clipping (each of the six frustum planes can add a vertex to a polygon).
+fn check_budget(
+    scene: &Scene,
+    visible: &[(usize, bool)],
+    vertex_total: usize,
+    options: &PrepareOptions,
+) -> Result<()> {
+    let budget = crate::budget::MemoryBudget::from_option(options.memory_limit);
+    let (mut polygons, mut indices) = (0u64, 0u64);
+    for &(k, _) in visible {
+        let (_, idx, _) = scene.objects()[k].mesh.polygon_arrays();
+        polygons += scene.objects()[k].mesh.polygon_count() as u64;
+        indices += idx.len() as u64;
+    }
+    let vertex_bytes = (size_of::<ViewVertex>() + 1) as u64;
+    let bytes = (vertex_total as u64)
+        .saturating_mul(vertex_bytes)
+        .saturating_add(polygons.saturating_mul(12))
+        .saturating_add(indices.saturating_mul(4));
+    budget.check(BUDGET_STRUCTURE, polygons, bytes)
 }
 
 /// Keeps the "wholly inside" flag of an object only if every one of its vertices has

@@ -125,10 +125,20 @@ pub struct BspOptions {
     /// The most fragments a build may make (every polygon, and two per split) before it
     /// gives up with an error: polygons
     /// that cut each other everywhere (random or interpenetrating geometry) multiply
-    /// (the 10,000 large triangles of `demo:triangles` make 14 million fragments,
-    /// 3.2 GB; 30,000 such triangles ran out of memory). Each costs about 230 bytes: the
-    /// default, 16 million, about 3.7 GB.
+    /// (the 10,000 large triangles of `demo:triangles` would make 14 million
+    /// fragments; 5,000 random large triangles made 2 million in 6 s). A fragment of
+    /// such a tree takes about 500 bytes, not the 230 of a fragment alone: each copies
+    /// the list of cuts that made it, which grows with the depth. The default, 2
+    /// million, is about 1 GB and a few seconds of building; the memory budget
+    /// ([`BspOptions::memory_limit`]) bounds the bytes whatever the count.
     pub max_fragments: usize,
+    /// The memory budget of the build in bytes (see [`crate::budget`]): the tree's
+    /// vectors (fragments, their vertices and cuts, nodes) and the sets waiting to be
+    /// split are summed by capacity after each node, and the build stops with an
+    /// [`Error::Budget`] naming "BSP fragments" when they pass it. `None`: the default
+    /// budget. (A count of fragments alone is no bound of the bytes: each fragment
+    /// copies the list of cuts that made it, which grows with the depth of the tree.)
+    pub memory_limit: Option<u64>,
 }
 
 impl BspOptions {
@@ -143,8 +153,16 @@ impl BspOptions {
         seed: 0x0B5C_0BA5_EED5,
         tolerance: 1e-9,
         axis_planes: true,
-        max_fragments: 16_000_000,
+        max_fragments: 2_000_000,
+        memory_limit: None,
     };
+
+    /// These options with a memory budget in bytes (see [`BspOptions::memory_limit`]).
+    #[must_use]
+    pub fn with_memory_limit(mut self, memory_limit: Option<u64>) -> Self {
+        self.memory_limit = memory_limit;
+        self
+    }
 
     /// These options with another fragment budget (see [`BspOptions::max_fragments`]).
     #[must_use]
@@ -557,9 +575,13 @@ impl BspTree {
             depth: 0,
         };
         self.nodes.push(placeholder);
+        let budget = crate::budget::MemoryBudget::from_option(options.memory_limit);
+        // Bytes of the sets waiting on the stack.
+        let mut waiting = all.capacity() as u64 * 4;
         let mut stack: Vec<(u32, Vec<u32>, u32)> = vec![(0, all, 1)];
         let mut points = Vec::new();
         while let Some((n, set, depth)) = stack.pop() {
+            waiting -= set.capacity() as u64 * 4;
             let (plane, eps, splitter) = match self.choose_splitter(&set, options, &mut rng) {
                 Splitter::Polygon(i) => {
                     let f = &self.fragments[set[i] as usize];
@@ -611,9 +633,14 @@ impl BspTree {
                 } else {
                     node.back = Some(idx);
                 }
+                waiting += child.capacity() as u64 * 4;
                 stack.push((idx, child, depth + 1));
             }
             self.nodes[n as usize] = node;
+            let bytes = self.bytes() + waiting + stack.capacity() as u64 * 32;
+            if bytes > budget.limit() {
+                return Err(budget.exceeded("BSP fragments", self.fragments.len() as u64, bytes));
+            }
             if self.fragments.len() > options.max_fragments {
                 return Err(Error::option(
                     "bsp fragments",
@@ -628,6 +655,21 @@ impl BspTree {
             }
         }
         Ok(())
+    }
+
+    /// The bytes the tree's vectors hold (by capacity).
+    fn bytes(&self) -> u64 {
+        fn b<T>(v: &Vec<T>) -> u64 {
+            (v.capacity() * size_of::<T>()) as u64
+        }
+        b(&self.nodes)
+            + b(&self.node_fragments)
+            + b(&self.fragments)
+            + b(&self.fragment_vertices)
+            + b(&self.vertices)
+            + b(&self.cuts)
+            + b(&self.local)
+            + b(&self.spheres)
     }
 
     /// Children have larger indices than their parent: one pass from the end.

@@ -224,17 +224,35 @@ pub struct GridHit {
     pub cell: Option<[u32; 3]>,
 }
 
+/// The structure named by the grid's budget errors.
+pub const GRID_STRUCTURE: &str = "ray-casting grid cell references";
+
 impl UniformGrid {
     /// Builds the grid over the triangles.
     #[must_use]
     pub fn build(triangles: &SceneTriangles, options: &GridOptions) -> Self {
+        // No grid passes u64::MAX bytes: the build cannot fail on the budget.
+        let unbounded = crate::budget::MemoryBudget::new(u64::MAX);
+        Self::build_with_budget(triangles, options, &unbounded).unwrap_or_default()
+    }
+
+    /// [`UniformGrid::build`] held to a memory budget (see [`crate::budget`]): the
+    /// (cell, triangle) references are counted as they are made (large triangles
+    /// spanning many cells multiply them) and the build stops with an
+    /// [`crate::Error::Budget`] when they, the cell table and the sorted references
+    /// would pass it.
+    pub fn build_with_budget(
+        triangles: &SceneTriangles,
+        options: &GridOptions,
+        budget: &crate::budget::MemoryBudget,
+    ) -> crate::Result<Self> {
         let start = Instant::now();
         let mut grid = UniformGrid::default();
         let n = triangles.len();
         let raw = triangles.bounds();
         if n == 0 || raw.is_empty() || n > u32::MAX as usize {
             grid.stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
-            return grid;
+            return Ok(grid);
         }
         // Pad so that triangles on the boundary are inside and flat scenes get a
         // thickness.
@@ -284,6 +302,14 @@ impl UniformGrid {
                                 (bmax - bmin) * 0.5 + grow,
                             )
                         } {
+                            if pairs.len() == pairs.capacity() {
+                                // Pairs (8 bytes, doubled by the growth), their sorted
+                                // copy (4) and the two cell tables.
+                                let count = pairs.len() as u64;
+                                let bytes = count * (16 + 4) + (cells as u64 + 1) * 8;
+                                budget.check(GRID_STRUCTURE, count, bytes)?;
+                                crate::budget::try_grow(budget, GRID_STRUCTURE, &mut pairs, 1)?;
+                            }
                             pairs.push((grid.cell_index(c) as u32, t as u32));
                         }
                     }
@@ -317,7 +343,7 @@ impl UniformGrid {
         grid.starts = starts;
         grid.refs = refs;
         grid.stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
-        grid
+        Ok(grid)
     }
 
     /// The build figures.

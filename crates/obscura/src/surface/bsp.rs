@@ -55,7 +55,11 @@ use crate::{Error, Frame, Result};
 
 /// Renders a prepared view with a BSP tree built for it from `options.bsp`.
 pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
-    let tree = BspTree::build(view.scene(), &options.bsp)?;
+    // The render's budget, unless the BSP options carry their own.
+    let bsp = options
+        .bsp
+        .with_memory_limit(options.bsp.memory_limit.or(options.memory_limit));
+    let tree = BspTree::build(view.scene(), &bsp)?;
     render_with_tree(&tree, view, options)
 }
 

@@ -147,6 +147,10 @@ pub struct RenderOptions {
     pub octree_depth: u32,
     /// Called as long work progresses.
     pub progress: Option<Progress>,
+    /// The memory budget of the render in bytes (frame buffers, bins, fragments,
+    /// splits, nodes, grids: see [`crate::budget`]); `None` takes the default, half of
+    /// the memory available.
+    pub memory_limit: Option<u64>,
 }
 
 impl Default for RenderOptions {
@@ -157,6 +161,7 @@ impl Default for RenderOptions {
             bsp: crate::accel::bsp::BspOptions::default(),
             octree_depth: 7,
             progress: None,
+            memory_limit: None,
         }
     }
 }
@@ -169,6 +174,7 @@ impl fmt::Debug for RenderOptions {
             .field("bsp", &self.bsp)
             .field("octree_depth", &self.octree_depth)
             .field("progress", &self.progress.is_some())
+            .field("memory_limit", &self.memory_limit)
             .finish()
     }
 }
@@ -207,6 +213,19 @@ impl RenderOptions {
     pub fn with_progress(mut self, progress: Progress) -> Self {
         self.progress = Some(progress);
         self
+    }
+
+    /// These options with a memory budget in bytes (`None`: the default).
+    #[must_use]
+    pub fn with_memory_limit(mut self, limit: Option<u64>) -> Self {
+        self.memory_limit = limit;
+        self
+    }
+
+    /// The memory budget these options give.
+    #[must_use]
+    pub fn budget(&self) -> crate::budget::MemoryBudget {
+        crate::budget::MemoryBudget::from_option(self.memory_limit)
     }
 
     /// Reports progress if someone listens.
@@ -275,6 +294,7 @@ pub fn render(
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
     let start = Instant::now();
+    check_budget(algorithm, view, options)?;
     let (frame, mut stats) = match algorithm {
         Algorithm::ZBuffer => zbuffer::render(view, options),
         Algorithm::Scanline => scanline::render(view, options),
@@ -292,6 +312,65 @@ pub fn render(
     }?;
     stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
     Ok((frame, stats))
+}
+
+/// The structure named by the budget error of a frame and its per-pixel buffers.
+pub const FRAME_STRUCTURE: &str = "frame buffers (ids and depths per pixel)";
+
+/// Estimates, before an algorithm runs, what it allocates in proportion to the image
+/// and to the view's polygons, and refuses it over the budget of `options` (see
+/// [`crate::budget`]). Per pixel: the frame's id and depth (8 bytes), and the keys of
+/// the algorithms that paint with a depth test (8 more for depth sort and a
+/// back-to-front BSP) or step a z-buffer row (the reference z-buffer, 4). Per polygon,
+/// the algorithm's own copies: the scanline's edges and faces, the depth sort's work
+/// set with room for its split budget (`8 P + 1024` pieces), Warnock's lists, the ray
+/// casters' triangles and hierarchies. Structures that grow with the geometry are held
+/// to the budget where they are built (BSP fragments, depth-sort splits, the
+/// z-buffer's bins, octree nodes, the grid's cells).
+pub fn check_budget(
+    algorithm: Algorithm,
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+) -> Result<()> {
+    let budget = options.budget();
+    let pixels = view.viewport().pixel_count() as u64;
+    let painted_keys = matches!(algorithm, Algorithm::DepthSort | Algorithm::DepthSortMatrix)
+        || (algorithm == Algorithm::Bsp
+            && options.bsp.traversal == crate::accel::bsp::BspTraversal::BackToFront);
+    let per_pixel = 8 + if painted_keys { 8 } else { 0 };
+    budget.check_items(FRAME_STRUCTURE, pixels, per_pixel)?;
+    // The ray casters build on the scene's triangles, the others on the view's.
+    let polygons = if matches!(
+        algorithm,
+        Algorithm::Raycast
+            | Algorithm::RaycastBounds
+            | Algorithm::RaycastBvh
+            | Algorithm::RaycastGrid
+    ) {
+        view.scene().triangle_count() as u64
+    } else {
+        view.polygon_count() as u64
+    };
+    let vertices = view.vertices().len() as u64;
+    // Bytes per view polygon and per view vertex of each algorithm's own copies.
+    let (per_polygon, per_vertex, structure) = match algorithm {
+        Algorithm::ZBuffer | Algorithm::Octree => return Ok(()),
+        Algorithm::Scanline => (192, 0, "scanline edge table and faces"),
+        Algorithm::DepthSort | Algorithm::DepthSortMatrix => {
+            (9 * 160, 9 * 48, "depth-sort work set and split pieces")
+        }
+        Algorithm::Bsp => (160, 64, "BSP fragments"),
+        Algorithm::Warnock => (96, 0, "Warnock face lists"),
+        Algorithm::Raycast
+        | Algorithm::RaycastBounds
+        | Algorithm::RaycastBvh
+        | Algorithm::RaycastGrid => (192, 0, "ray-casting triangles and hierarchy"),
+    };
+    let bytes = (polygons.saturating_add(1024))
+        .saturating_mul(per_polygon)
+        .saturating_add(vertices.saturating_mul(per_vertex))
+        .saturating_add(pixels.saturating_mul(per_pixel));
+    budget.check(structure, polygons, bytes)
 }
 
 #[cfg(test)]

@@ -48,7 +48,10 @@
 //!   [`crate::accel::octree`]); per ray O(depth) nodes per voxel crossed until the first
 //!   surface voxel. The stats give `nodes_visited_per_ray`.
 //! - Memory: 16 bytes per node (`bytes_per_node`, `memory_bytes` in the stats); the
-//!   default depth 7 (128 voxels on a side) takes about 2 MB for demo:default.
+//!   default depth 7 (128 voxels on a side) takes about 2 MB for demo:default. Before
+//!   building, [`check_budget`] estimates the nodes and the cells' triangle lists from
+//!   the depth and the scene's triangles and refuses a tree over the memory budget
+//!   ([`RenderOptions::memory_limit`]).
 //!
 //! Rows of the image are traced in parallel with the `parallel` feature.
 
@@ -69,6 +72,7 @@ use crate::{Frame, Result};
 /// per pixel through it, front to back.
 pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
     let vp = view.viewport();
+    check_budget(view.scene(), options)?;
     let mut frame = Frame::new(vp)?;
     let start = Instant::now();
     let tree = Octree::from_scene(view.scene(), options.octree_depth)?;
@@ -111,6 +115,78 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
     stats.set("pixels_covered", frame.covered_pixels() as f64);
     stats.set("near_faces", near.triangles.len() as f64);
     Ok((frame, stats))
+}
+
+/// The structure named by the octree's budget errors.
+pub const BUDGET_STRUCTURE: &str = "octree nodes and voxel triangle lists";
+
+/// Refuses, before anything is built, an octree of this depth whose estimated size
+/// exceeds the budget of `options` ([`crate::budget`]).
+///
+/// Estimate: the voxels each triangle meets at each level, with voxels of side `v` in a
+/// cube enclosing the scene: at most `√3 a + 4 p + 8` for a triangle of area `a v²`
+/// and perimeter `p v` (a plane crosses at most `|nx| + |ny| + |nz| <= √3` voxels per
+/// unit of area; the edges and corners add the rest). Each such (triangle, cell) pair
+/// is an entry of a cell's triangle list (4 bytes) and may make a node with its 7
+/// siblings (8 x 16 bytes, capped at the `8^level` cells of the level), plus the
+/// build's world-space triangles (84 bytes each). An upper bound: overlapping
+/// triangles share voxels and nodes.
+pub fn check_budget(scene: &crate::Scene, options: &RenderOptions) -> Result<()> {
+    let budget = options.budget();
+    let (bytes, nodes) = estimate(scene, options.octree_depth);
+    budget.check(
+        &format!(
+            "{BUDGET_STRUCTURE} at octree depth {} (each level less takes about 4 times less)",
+            options.octree_depth
+        ),
+        nodes,
+        bytes,
+    )
+}
+
+/// The estimate of [`check_budget`]: (bytes, nodes).
+fn estimate(scene: &crate::Scene, depth: u32) -> (u64, u64) {
+    let Some(region) = crate::accel::octree::Region::enclosing(&scene.bounds()) else {
+        return (0, 0);
+    };
+    let side = region.side();
+    let leaf = side / f64::from(1u32 << depth.min(30));
+    // Sums over triangles of the area and perimeter in leaf-voxel units.
+    let (mut area, mut perimeter, mut triangles) = (0.0f64, 0.0f64, 0u64);
+    for o in scene.objects() {
+        let t = o.transform;
+        for p in 0..o.mesh.polygon_count() {
+            let poly = o.mesh.polygon(p);
+            let world = |i: usize| t.transform_point3(o.mesh.positions()[poly[i] as usize]);
+            let v0 = world(0);
+            for k in 1..poly.len().saturating_sub(1) {
+                let (a, b) = (world(k), world(k + 1));
+                area += 0.5 * (a - v0).cross(b - v0).length() / (leaf * leaf);
+                perimeter += ((a - v0).length() + (b - a).length() + (v0 - b).length()) / leaf;
+                triangles += 1;
+            }
+        }
+    }
+    let (mut pairs, mut nodes) = (0.0f64, 0.0f64);
+    for level in 0..=depth {
+        // Voxels of this level are 2^(depth - level) leaf voxels on a side.
+        let scale = f64::from(1u32 << (depth - level).min(30));
+        let met =
+            3f64.sqrt() * area / (scale * scale) + 4.0 * perimeter / scale + 8.0 * triangles as f64;
+        pairs += met;
+        nodes += 8.0 * met.min(8f64.powi(level as i32));
+    }
+    let bytes = pairs * 4.0
+        + nodes * std::mem::size_of::<crate::accel::octree::Node>() as f64
+        + triangles as f64 * 84.0;
+    let clamp = |x: f64| {
+        if x.is_finite() {
+            x.min(u64::MAX as f64) as u64
+        } else {
+            u64::MAX
+        }
+    };
+    (clamp(bytes), clamp(nodes))
 }
 
 /// The scene's triangles that may pass through a voxel holding the near-plane point

@@ -138,10 +138,11 @@ pub fn render(
         Acceleration::Grid => {
             // Cells sized for the rounding of this view's rays (see `accel::grid`).
             let origins = PrimaryRays::new(view.camera(), view.viewport()).origin_magnitude();
-            let grid = UniformGrid::build(
+            let grid = UniformGrid::build_with_budget(
                 &triangles,
                 &GridOptions::default().with_ray_origins(origins),
-            );
+                &options.budget(),
+            )?;
             render_grid(view, &triangles, &grid, options)
         }
     }?;

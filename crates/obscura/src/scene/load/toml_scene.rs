@@ -50,6 +50,21 @@ use crate::{Error, Result};
 /// `segments` should not exhaust memory, nor should a dozen primitives at the limit).
 pub const MAX_PRIMITIVE_FACES: u64 = 20_000_000;
 
+/// Most faces all the objects of one scene file may place together, every placement
+/// of a mesh counting its faces again (a 1.2 MB file placing one mesh 10,000 times
+/// described 200 million faces and ran out of memory). Checked table by table, before
+/// the objects are added; the memory budget ([`super::LoadOptions::memory_limit`]) is
+/// checked at the same time with [`PLACED_FACE_BYTES`] and [`PLACED_VERTEX_BYTES`].
+pub const MAX_PLACED_FACES: u64 = 100_000_000;
+
+/// Bytes a placed face is estimated to take once the scene is viewed (the prepared
+/// view's offsets, indices, face and object ids), for the memory budget.
+pub const PLACED_FACE_BYTES: u64 = 32;
+
+/// Bytes a placed vertex is estimated to take (its world, eye and screen positions in
+/// the prepared view, its outcode), for the memory budget.
+pub const PLACED_VERTEX_BYTES: u64 = 80;
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SceneFile {
@@ -142,6 +157,7 @@ pub(crate) fn load_in(path: &Path, sources: &mut Sources<'_>) -> Result<Scene> {
         let line = e.span().map_or(1, |s| line_of_offset(&text, s.start));
         Error::parse(path, line, e.message().trim().to_string())
     })?;
+    let budget = crate::budget::MemoryBudget::from_option(sources.options().memory_limit);
     SceneReader {
         path,
         line_starts: super::LineIndex::new(&text),
@@ -149,6 +165,8 @@ pub(crate) fn load_in(path: &Path, sources: &mut Sources<'_>) -> Result<Scene> {
         cache: HashMap::new(),
         primitive_faces: std::cell::Cell::new(0),
         sources,
+        budget,
+        placed: (0, 0),
     }
     .read(file)
 }
@@ -170,6 +188,11 @@ struct SceneReader<'a, 'o> {
     cache: HashMap<PathBuf, Arc<CachedFile>>,
     /// Faces of the primitives generated so far (see [`MAX_PRIMITIVE_FACES`]).
     primitive_faces: std::cell::Cell<u64>,
+    /// The memory budget of the load.
+    budget: crate::budget::MemoryBudget,
+    /// Faces and vertices placed so far, each placement counted (see
+    /// [`MAX_PLACED_FACES`]).
+    placed: (u64, u64),
 }
 
 impl SceneReader<'_, '_> {
@@ -184,9 +207,17 @@ impl SceneReader<'_, '_> {
     fn read(mut self, file: SceneFile) -> Result<Scene> {
         let mut scene = Scene::new();
         let mut file_up = None;
+        // Every table's objects first, counted (meshes are shared, so this is cheap),
+        // so that totals over the cap or the budget are refused before any object is
+        // added (adding checks and bounds every vertex of every placement).
+        let mut placed = Vec::with_capacity(file.objects.len());
         for (k, spec) in file.objects.iter().enumerate() {
             let span = spec.span();
             let descs = self.objects_of(spec.get_ref(), &span, k, &mut scene, &mut file_up)?;
+            self.count_placed(&descs, &span)?;
+            placed.push((span, descs));
+        }
+        for (span, descs) in placed {
             for d in descs {
                 let name = d.name.clone();
                 scene.add(d).map_err(|e| {
@@ -207,6 +238,38 @@ impl SceneReader<'_, '_> {
             scene.set_camera(Some(camera));
         }
         Ok(scene)
+    }
+
+    /// Adds the faces and vertices a table places to the totals, refusing totals over
+    /// [`MAX_PLACED_FACES`] or the memory budget, at the table's line.
+    fn count_placed(&mut self, descs: &[ObjectDesc], span: &Range<usize>) -> Result<()> {
+        let (faces, vertices) = descs.iter().fold(self.placed, |(f, v), d| {
+            (
+                f.saturating_add(d.mesh.polygon_count() as u64),
+                v.saturating_add(d.mesh.positions().len() as u64),
+            )
+        });
+        self.placed = (faces, vertices);
+        if faces > MAX_PLACED_FACES {
+            return Err(self.error(
+                span,
+                format!(
+                    "the objects placed up to this table have {faces} faces, more than the \
+                     {MAX_PLACED_FACES} a scene file may place (each placement of a mesh \
+                     counts its faces again)"
+                ),
+            ));
+        }
+        let bytes = faces
+            .saturating_mul(PLACED_FACE_BYTES)
+            .saturating_add(vertices.saturating_mul(PLACED_VERTEX_BYTES));
+        self.budget
+            .check(
+                "faces placed by the scene file (each placement counted)",
+                faces,
+                bytes,
+            )
+            .map_err(|e| e.budget_at(format!("{}:{}", self.path.display(), self.line(span))))
     }
 
     /// The objects one `[[object]]` table places.

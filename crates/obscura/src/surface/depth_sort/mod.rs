@@ -65,7 +65,9 @@
 //! - Complexity: O(P log P) for the sort and O(P k) for k overlapping candidates per
 //!   polygon on ordinary scenes; O(P^2) comparisons at worst (seed 000), and each
 //!   split adds a polygon. A split budget (`8 P + 1024`) guarantees termination on
-//!   degenerate input; past it (or when rounding prevents a split), a conflict is
+//!   degenerate input, and the memory budget ([`RenderOptions::memory_limit`]) bounds
+//!   the pieces' bytes (each piece copies the cuts that made it): a split that would
+//!   pass it ends the render with [`crate::Error::Budget`]; past it (or when rounding prevents a split), a conflict is
 //!   painted as found and counted in `unresolved`, and from then on every polygon is
 //!   painted depth-tested against what is painted (the z-buffer's test): those
 //!   painted before lie behind all that remain, so the image is still the
@@ -171,8 +173,9 @@ fn run(
     options: &RenderOptions,
     variant: Variant,
     paint: &mut dyn FnMut(&WorkSet, u32),
-) -> Stats {
+) -> Result<Stats> {
     let mut ws = WorkSet::from_view(view, options.fill_rule);
+    ws.budget = options.budget();
     let sorted = ws.polys.len();
     let mut c = Counters::default();
     let mut progress = |f: f64| options.report(f);
@@ -216,7 +219,10 @@ fn run(
     stats.set("splits", c.splits as f64);
     stats.set("unresolved", c.unresolved as f64);
     stats.set("unsorted", c.unsorted as f64);
-    stats
+    match ws.over_budget {
+        Some(e) => Err(e),
+        None => Ok(stats),
+    }
 }
 
 fn render_variant(
@@ -246,7 +252,7 @@ fn render_variant(
             let region = ws.polys[i as usize].rect;
             painter.paint_piece(&screen, plane, region, ws.cuts(i), face);
         }
-    });
+    })?;
     stats.set("polygons_painted", painter.polygons_painted as f64);
     stats.set("pixels_written", painter.pixels_written as f64);
     Ok((painter.finish(), stats))
@@ -254,6 +260,9 @@ fn render_variant(
 
 fn order_variant(view: &PreparedView<'_>, options: &RenderOptions, variant: Variant) -> PaintOrder {
     let mut polygons = Vec::new();
+    // A paint order has no error to return: it is computed without a budget (no set
+    // passes u64::MAX bytes, so `run` cannot fail here).
+    let options = &options.clone().with_memory_limit(Some(u64::MAX));
     let stats = run(view, options, variant, &mut |ws, i| {
         let p = &ws.polys[i as usize];
         polygons.push(OrderedPolygon {
@@ -262,7 +271,8 @@ fn order_variant(view: &PreparedView<'_>, options: &RenderOptions, variant: Vari
             source: p.source as usize,
             vertices: ws.vertices(i).to_vec(),
         });
-    });
+    })
+    .unwrap_or_default();
     PaintOrder { polygons, stats }
 }
 

@@ -127,6 +127,11 @@ pub(super) struct WorkSet {
     /// Per polygon made from a view polygon (not the pieces, added after), the
     /// coverage of its screen polygon, computed once when first needed.
     coverages: Vec<std::cell::OnceCell<Option<PolygonCoverage>>>,
+    /// The memory budget the pieces of splits are held to (see [`crate::budget`]).
+    pub budget: crate::budget::MemoryBudget,
+    /// Set when a split was refused because the set passed the budget: the render
+    /// ends with this error.
+    pub over_budget: Option<crate::Error>,
 }
 
 impl WorkSet {
@@ -149,6 +154,8 @@ impl WorkSet {
             cuts: Vec::new(),
             rays: PixelRays::new(view, |p| t.world_to_eye(p), |d| t.rotation * d),
             coverages: Vec::new(),
+            budget: crate::budget::MemoryBudget::new(u64::MAX),
+            over_budget: None,
         };
         let mut screen = Vec::new();
         for (i, poly) in view.polygons().enumerate() {
@@ -404,6 +411,18 @@ impl WorkSet {
     /// vertices equal to `i`'s keep their exact projection, new ones are projected
     /// once and shared by both pieces.
     pub fn split(&mut self, i: u32, by: u32) -> Option<[u32; 2]> {
+        if self.over_budget.is_some() {
+            return None;
+        }
+        let bytes = self.bytes();
+        if bytes > self.budget.limit() {
+            self.over_budget = Some(self.budget.exceeded(
+                "depth-sort split pieces",
+                self.polys.len() as u64,
+                bytes,
+            ));
+            return None;
+        }
         let plane = self.polys[by as usize].plane;
         let eps = self.polys[by as usize].eps.max(self.polys[i as usize].eps);
         let parent = self.polys[i as usize];
@@ -422,6 +441,15 @@ impl WorkSet {
         };
         self.scratch = eye;
         result
+    }
+
+    /// The bytes the set's vectors hold (by capacity; the coverages' spans are not
+    /// counted).
+    fn bytes(&self) -> u64 {
+        fn b<T>(v: &Vec<T>) -> u64 {
+            (v.capacity() * size_of::<T>()) as u64
+        }
+        b(&self.polys) + b(&self.verts) + b(&self.depth_planes) + b(&self.cuts) + b(&self.coverages)
     }
 
     fn push_piece(

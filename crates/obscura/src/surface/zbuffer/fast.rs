@@ -74,6 +74,14 @@ impl Kernel {
 /// Side of a tile, in pixels: a tile's keys and ids take 32 KiB.
 pub(super) const TILE: u32 = 64;
 
+/// Bytes a big polygon holds while its band is drawn: its setup, face and nearest key,
+/// and its entry in the sorted order (for the memory budget, see `super::check_budget`).
+pub(super) const BIG_ENTRY_BYTES: u64 = {
+    let t = size_of::<(BlockSetup<3>, u32, f32)>();
+    let o = size_of::<(Setup, u32, f32)>();
+    (if t > o { t } else { o }) as u64 + size_of::<(f32, u32)>() as u64
+};
+
 /// Polygons wider or taller than this many pixels are drawn tile by tile (the
 /// `big_polygons` of the stats); the others are drawn at once.
 pub const BIG: u32 = 64;

@@ -109,6 +109,11 @@ fn render_scheduled(
     threads: usize,
     schedule: Schedule,
 ) -> Result<(Frame, Stats)> {
+    let bands = match schedule {
+        Schedule::Bands => view.viewport().height.div_ceil(bands::BAND_ROWS),
+        Schedule::Whole => 1,
+    };
+    check_budget(view, options, bands)?;
     let mut frame = Frame::zeroed(view.viewport())?;
     let counts = if schedule == Schedule::Bands {
         bands::draw_banded(view, options.fill_rule, kernel, threads, &mut frame)
@@ -116,6 +121,67 @@ fn render_scheduled(
         fast::draw_all(view, options.fill_rule, kernel, &mut frame)
     };
     Ok((frame, counts.fast_stats(view)))
+}
+
+/// The structure named by the z-buffer's budget errors.
+pub const BUDGET_STRUCTURE: &str = "z-buffer big-polygon bins";
+
+/// Refuses, before drawing, a view whose big polygons (wider or taller than [`BIG`]
+/// pixels, kept with their setups and put in the bins of the 64x64 tiles they overlap)
+/// would take more than the budget of `options` (see [`crate::budget`]): 16.6 million
+/// large triangles at 320x240 needed 3.7 GB. Per big polygon: its setup and order
+/// entry in each band of rows it reaches, 4 bytes per tile it overlaps; per small one,
+/// 4 bytes per band when drawn in bands. First the bound with every polygon big and
+/// covering every tile; only when that passes the budget, the polygons' boxes are
+/// measured (one pass over the view's vertices).
+fn check_budget(view: &PreparedView<'_>, options: &RenderOptions, bands: u32) -> Result<()> {
+    let budget = options.budget();
+    let vp = view.viewport();
+    let (tiles_x, tiles_y) = (
+        vp.width.div_ceil(fast::TILE),
+        vp.height.div_ceil(fast::TILE),
+    );
+    let bands_u = u64::from(bands);
+    let per_band = fast::BIG_ENTRY_BYTES + 4;
+    let worst = u64::from(tiles_x) * u64::from(tiles_y) * 4 + bands_u * per_band;
+    let n = view.polygon_count() as u64;
+    if n.saturating_mul(worst) <= budget.limit() {
+        return Ok(());
+    }
+    let (starts, indices, _) = view.polygon_arrays();
+    let vertices = view.vertices();
+    let (w, h) = (f64::from(vp.width), f64::from(vp.height));
+    let (mut bytes, mut big) = (0u64, 0u64);
+    for p in 0..view.polygon_count() {
+        let (mut x0, mut y0) = (f64::INFINITY, f64::INFINITY);
+        let (mut x1, mut y1) = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for &i in &indices[starts[p] as usize..starts[p + 1] as usize] {
+            let v = &vertices[i as usize];
+            (x0, x1, y0, y1) = (x0.min(v.x), x1.max(v.x), y0.min(v.y), y1.max(v.y));
+        }
+        // Pixels (with a margin of one) of the box, clipped to the image.
+        let (x0, x1) = ((x0 - 1.0).clamp(0.0, w), (x1 + 1.0).clamp(0.0, w));
+        let (y0, y1) = ((y0 - 1.0).clamp(0.0, h), (y1 + 1.0).clamp(0.0, h));
+        if !(x1 > x0 && y1 > y0) {
+            continue;
+        }
+        let band_rows = f64::from(bands::BAND_ROWS);
+        let reached = if bands > 1 {
+            ((y1 / band_rows).ceil() - (y0 / band_rows).floor()).max(1.0) as u64
+        } else {
+            1
+        };
+        if x1 - x0 > f64::from(BIG) || y1 - y0 > f64::from(BIG) {
+            big += 1;
+            let tile = f64::from(fast::TILE);
+            let tiles = ((x1 / tile).ceil() - (x0 / tile).floor()).max(1.0)
+                * ((y1 / tile).ceil() - (y0 / tile).floor()).max(1.0);
+            bytes = bytes.saturating_add(reached * per_band + 4 * tiles as u64);
+        } else if bands > 1 {
+            bytes = bytes.saturating_add(4 * reached);
+        }
+    }
+    budget.check(BUDGET_STRUCTURE, big, bytes)
 }
 
 /// Counts of what the z-buffer did, and the seconds of its phases.
