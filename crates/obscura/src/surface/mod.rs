@@ -355,16 +355,16 @@ pub fn check_budget(
     // Bytes per view polygon and per view vertex of each algorithm's own copies.
     let (per_polygon, per_vertex, structure) = match algorithm {
         Algorithm::ZBuffer | Algorithm::Octree => return Ok(()),
-        Algorithm::Scanline => (192, 0, "scanline edge table and faces"),
+        Algorithm::Scanline => (256, 0, "scanline edge table and faces"),
         Algorithm::DepthSort | Algorithm::DepthSortMatrix => {
             (9 * 160, 9 * 48, "depth-sort work set and split pieces")
         }
         Algorithm::Bsp => (160, 64, "BSP fragments"),
-        Algorithm::Warnock => (96, 0, "Warnock face lists"),
+        Algorithm::Warnock => (256, 0, "Warnock face lists"),
         Algorithm::Raycast
         | Algorithm::RaycastBounds
         | Algorithm::RaycastBvh
-        | Algorithm::RaycastGrid => (192, 0, "ray-casting triangles and hierarchy"),
+        | Algorithm::RaycastGrid => (256, 0, "ray-casting triangles and hierarchy"),
     };
     let bytes = (polygons.saturating_add(1024))
         .saturating_mul(per_polygon)

@@ -132,6 +132,10 @@ pub const BUDGET_STRUCTURE: &str = "octree nodes and voxel triangle lists";
 /// build's world-space triangles (84 bytes each). An upper bound: overlapping
 /// triangles share voxels and nodes.
 pub fn check_budget(scene: &crate::Scene, options: &RenderOptions) -> Result<()> {
+    if options.octree_depth > crate::accel::octree::MAX_DEPTH {
+        // The build refuses the depth itself, naming the option.
+        return Ok(());
+    }
     let budget = options.budget();
     let (bytes, nodes) = estimate(scene, options.octree_depth);
     budget.check(
