@@ -366,13 +366,21 @@ impl Camera {
         } else {
             bounds.center()
         };
+        // The bounding sphere's radius, relative to the scene: no absolute floor (one
+        // of 1e-9 left a triangle 1e-20 across an empty picture). Only the rounding of
+        // the coordinates bounds it below: the eye must stay distinguishable from the
+        // centre (`Camera::validate` asks for 8 `eps` of the coordinates; a box 4 wide
+        // at 1e16 was framed from 11 units, "the eye is on the target").
+        let magnitude = center.abs().max_element();
         let radius = if bounds.is_empty() {
             1.0
         } else {
-            (bounds.extent().length() * 0.5).max(1e-9)
+            (crate::geom::robust_length(bounds.extent()) * 0.5).max(16.0 * f64::EPSILON * magnitude)
         };
-        // Build a pleasant diagonal in the frame where `up` is the vertical.
-        let up = up.normalize();
+        let radius = if radius > 0.0 { radius } else { 1.0 };
+        // Build a pleasant diagonal in the frame where `up` is the vertical (any
+        // length: 1e308 or 1e-320 is scaled before it is normalized).
+        let up = crate::geom::unit_direction(up).unwrap_or(DVec3::Y);
         let side = if up.abs().dot(DVec3::X) > 0.9 {
             DVec3::Y
         } else {
