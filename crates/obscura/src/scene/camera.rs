@@ -367,17 +367,18 @@ impl Camera {
             bounds.center()
         };
         // The bounding sphere's radius, relative to the scene: no absolute floor (one
-        // of 1e-9 left a triangle 1e-20 across an empty picture). Only the rounding of
-        // the coordinates bounds it below: the eye must stay distinguishable from the
-        // centre (`Camera::validate` asks for 8 `eps` of the coordinates; a box 4 wide
-        // at 1e16 was framed from 11 units, "the eye is on the target").
-        let magnitude = center.abs().max_element();
+        // of 1e-9 left a triangle 1e-20 across an empty picture).
         let radius = if bounds.is_empty() {
             1.0
         } else {
-            (crate::geom::robust_length(bounds.extent()) * 0.5).max(16.0 * f64::EPSILON * magnitude)
+            crate::geom::robust_length(bounds.extent()) * 0.5
         };
-        let radius = if radius > 0.0 { radius } else { 1.0 };
+        let magnitude = center.abs().max_element();
+        let radius = if radius > 0.0 {
+            radius
+        } else {
+            magnitude.max(1.0)
+        };
         // Build a pleasant diagonal in the frame where `up` is the vertical (any
         // length: 1e308 or 1e-320 is scaled before it is normalized).
         let up = crate::geom::unit_direction(up).unwrap_or(DVec3::Y);
@@ -393,7 +394,11 @@ impl Camera {
             (fov_y_degrees.to_radians() * 0.5).min((fov_y_degrees.to_radians() * 0.5).tan().atan());
         let half_fov_x = ((half_fov.tan()) * aspect).atan();
         let fit = half_fov.min(half_fov_x).sin();
-        let distance = radius / fit * 1.05;
+        // Only the rounding of the coordinates bounds the distance below: the eye must
+        // stay distinguishable from the centre (`Camera::validate` asks for 8 `eps` of
+        // the coordinates; a box 4 wide at 1e16 was framed from 11 units, "the eye is
+        // on the target"). Such a scene is then seen smaller than the view.
+        let distance = (radius / fit * 1.05).max(16.0 * f64::EPSILON * magnitude);
         let eye = center + dir * distance;
         let near = (distance - radius * 1.01).max(distance * 1e-3);
         let far = distance + radius * 1.01;
