@@ -155,6 +155,8 @@ fn the_automatic_camera_frames_tiny_and_far_scenes() {
         (1e-6, DVec3::ZERO),
         (1e20, DVec3::ZERO),
         (16.0, DVec3::splat(1e16)),
+        // Near the edge of the range: the usual side would put the eye beyond 1e30.
+        (1e29, DVec3::splat(8.5e29)),
     ] {
         let s = triangle(k, at);
         let f = frame(&s, Algorithm::ZBuffer);

@@ -358,7 +358,11 @@ impl Camera {
     /// A camera that shows the whole box: looking at its centre from the direction
     /// `(1, 0.6, 1.4)` rotated into the given up axis convention, far enough for its
     /// bounding sphere to fit the narrower field of view, with near and far planes
-    /// hugging the sphere.
+    /// hugging the sphere. Sizes are relative to the box (no absolute floor: a box
+    /// 1e-20 across is framed like a unit one); the distance is at least `16 eps` of
+    /// the centre's coordinates, so that the eye stays off the target, and the eye
+    /// looks from the origin's side when the usual side would put it beyond
+    /// [`super::MAX_COORDINATE`]. `up` may have any length.
     #[must_use]
     pub fn framing(bounds: &Aabb, aspect: f64, up: DVec3, fov_y_degrees: f64) -> Self {
         let center = if bounds.is_empty() {
@@ -399,7 +403,14 @@ impl Camera {
         // the coordinates; a box 4 wide at 1e16 was framed from 11 units, "the eye is
         // on the target"). Such a scene is then seen smaller than the view.
         let distance = (radius / fit * 1.05).max(16.0 * f64::EPSILON * magnitude);
-        let eye = center + dir * distance;
+        let mut eye = center + dir * distance;
+        if eye.abs().max_element() > super::MAX_COORDINATE {
+            // A scene near the edge of the range (a box at 1e30 less its size): look
+            // from the origin's side instead, which keeps the eye within the range
+            // whenever the scene leaves it room.
+            let toward_origin = DVec3::select(center.cmpgt(DVec3::ZERO), -dir.abs(), dir.abs());
+            eye = center + toward_origin * distance;
+        }
         let near = (distance - radius * 1.01).max(distance * 1e-3);
         let far = distance + radius * 1.01;
         Camera::perspective(eye, center, up, fov_y_degrees, near, far)
