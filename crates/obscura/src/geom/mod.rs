@@ -4,6 +4,8 @@
 //! (which side of a plane, which polygon is in front), so they must not flip under
 //! rounding. Epsilons are documented where they are used.
 
+use glam::DVec3;
+
 mod aabb;
 pub mod kdop;
 pub mod obb;
@@ -70,5 +72,54 @@ impl std::str::FromStr for BoundsKind {
                     format!("unknown bounding volume \"{s}\" (known: sphere, aabb, obb, kdop)"),
                 )
             })
+    }
+}
+
+/// The length of `v`, scaled by its largest component before squaring, so that it
+/// neither overflows (components beyond about 1e154) nor underflows (below about
+/// 1e-154) where `v.length()` would. Zero for a zero vector, not finite for a
+/// non-finite one.
+#[must_use]
+pub fn robust_length(v: DVec3) -> f64 {
+    let m = v.abs().max_element();
+    if m > 0.0 && m.is_finite() {
+        m * (v / m).length()
+    } else {
+        m
+    }
+}
+
+/// The unit vector along `v`, whatever its length (`1e308` or `1e-320` included:
+/// scaled by its largest component before it is normalized); `None` for a zero or
+/// non-finite vector.
+#[must_use]
+pub fn unit_direction(v: DVec3) -> Option<DVec3> {
+    let m = v.abs().max_element();
+    if !(m > 0.0 && m.is_finite()) {
+        return None;
+    }
+    let u = (v / m).normalize();
+    u.is_finite().then_some(u)
+}
+
+#[cfg(test)]
+mod scale_tests {
+    use super::*;
+
+    #[test]
+    fn lengths_and_directions_at_extreme_scales() {
+        for k in [1e-300, 1e-200, 1e-100, 1.0, 1e100, 1e200, 1e307] {
+            let v = DVec3::new(3.0, 0.0, 4.0) * k;
+            let l = robust_length(v);
+            assert!((l / k - 5.0).abs() < 1e-5, "{k}: {l}");
+            let u = unit_direction(v).unwrap();
+            assert!((u - DVec3::new(0.6, 0.0, 0.8)).length() < 1e-6, "{k}: {u}");
+        }
+        // Subnormal lengths too.
+        assert_eq!(unit_direction(DVec3::Z * 1e-320), Some(DVec3::Z));
+        assert_eq!(unit_direction(DVec3::ZERO), None);
+        assert_eq!(unit_direction(DVec3::new(f64::NAN, 0.0, 1.0)), None);
+        assert_eq!(unit_direction(DVec3::new(f64::INFINITY, 0.0, 1.0)), None);
+        assert_eq!(robust_length(DVec3::ZERO), 0.0);
     }
 }

@@ -69,7 +69,16 @@ impl Plane {
             return None;
         }
         let n = super::newell_normal(points);
+        // Scaled before squaring: |n| of a polygon 1e-100 across (1e-200) squares to
+        // zero, and of one 1e100 across to infinity.
+        // Rescaled only then, so ordinary polygons keep their planes to the bit.
         let len = n.length();
+        let big = n.abs().max_element();
+        let len = if (1e-150..=1e150).contains(&len) || !(big > 0.0 && big.is_finite()) {
+            len
+        } else {
+            big * (n / big).length()
+        };
         let scale = points
             .iter()
             .fold(0.0f64, |m, p| m.max(p.abs().max_element()));

@@ -358,7 +358,11 @@ impl Camera {
     /// A camera that shows the whole box: looking at its centre from the direction
     /// `(1, 0.6, 1.4)` rotated into the given up axis convention, far enough for its
     /// bounding sphere to fit the narrower field of view, with near and far planes
-    /// hugging the sphere.
+    /// hugging the sphere. Sizes are relative to the box (no absolute floor: a box
+    /// 1e-20 across is framed like a unit one); the distance is at least `16 eps` of
+    /// the centre's coordinates, so that the eye stays off the target, and the eye
+    /// looks from the origin's side when the usual side would put it beyond
+    /// [`super::MAX_COORDINATE`]. `up` may have any length.
     #[must_use]
     pub fn framing(bounds: &Aabb, aspect: f64, up: DVec3, fov_y_degrees: f64) -> Self {
         let center = if bounds.is_empty() {
@@ -366,13 +370,22 @@ impl Camera {
         } else {
             bounds.center()
         };
+        // The bounding sphere's radius, relative to the scene: no absolute floor (one
+        // of 1e-9 left a triangle 1e-20 across an empty picture).
         let radius = if bounds.is_empty() {
             1.0
         } else {
-            (bounds.extent().length() * 0.5).max(1e-9)
+            crate::geom::robust_length(bounds.extent()) * 0.5
         };
-        // Build a pleasant diagonal in the frame where `up` is the vertical.
-        let up = up.normalize();
+        let magnitude = center.abs().max_element();
+        let radius = if radius > 0.0 {
+            radius
+        } else {
+            magnitude.max(1.0)
+        };
+        // Build a pleasant diagonal in the frame where `up` is the vertical (any
+        // length: 1e308 or 1e-320 is scaled before it is normalized).
+        let up = crate::geom::unit_direction(up).unwrap_or(DVec3::Y);
         let side = if up.abs().dot(DVec3::X) > 0.9 {
             DVec3::Y
         } else {
@@ -385,8 +398,19 @@ impl Camera {
             (fov_y_degrees.to_radians() * 0.5).min((fov_y_degrees.to_radians() * 0.5).tan().atan());
         let half_fov_x = ((half_fov.tan()) * aspect).atan();
         let fit = half_fov.min(half_fov_x).sin();
-        let distance = radius / fit * 1.05;
-        let eye = center + dir * distance;
+        // Only the rounding of the coordinates bounds the distance below: the eye must
+        // stay distinguishable from the centre (`Camera::validate` asks for 8 `eps` of
+        // the coordinates; a box 4 wide at 1e16 was framed from 11 units, "the eye is
+        // on the target"). Such a scene is then seen smaller than the view.
+        let distance = (radius / fit * 1.05).max(16.0 * f64::EPSILON * magnitude);
+        let mut eye = center + dir * distance;
+        if eye.abs().max_element() > super::MAX_COORDINATE {
+            // A scene near the edge of the range (a box at 1e30 less its size): look
+            // from the origin's side instead, which keeps the eye within the range
+            // whenever the scene leaves it room.
+            let toward_origin = DVec3::select(center.cmpgt(DVec3::ZERO), -dir.abs(), dir.abs());
+            eye = center + toward_origin * distance;
+        }
         let near = (distance - radius * 1.01).max(distance * 1e-3);
         let far = distance + radius * 1.01;
         Camera::perspective(eye, center, up, fov_y_degrees, near, far)

@@ -6,6 +6,13 @@
 //! - a face with fewer than three distinct vertices, or of zero area, is *degenerate*:
 //!   it is dropped and counted (`LoadReport::degenerate_faces`), but still consumes its
 //!   face id, so ids keep matching the file's face order;
+//! - a planar face whose edges cross (a bow-tie quad, a pentagram) is
+//!   *self-intersecting*: it is dropped and counted (`LoadReport::self_intersecting_faces`),
+//!   keeping its face id. It has no inside a user would agree on (a bow-tie's two lobes
+//!   turn opposite ways: its Newell area can be zero, which had it dropped as "zero
+//!   area"; ear clipping a pentagram covers what the even-odd rule leaves out), so it is
+//!   not guessed at. Faces of more than [`SELF_INTERSECTION_MAX_VERTICES`] vertices are
+//!   not checked (the test is quadratic);
 //! - a non-planar n-gon is triangulated and counted (`LoadReport::nonplanar_faces`);
 //! - a planar but concave n-gon is triangulated silently (the pipeline wants convex
 //!   polygons), counted in `LoadReport::concave_faces`.
@@ -36,15 +43,18 @@ pub struct LoadReport {
     pub nonplanar_faces: usize,
     /// Planar concave n-gons that were triangulated.
     pub concave_faces: usize,
+    /// Faces dropped because their edges cross (see the module documentation).
+    pub self_intersecting_faces: usize,
     /// Other warnings. Each names the line or element of the file loaded (`line 5: ...`,
     /// `node 3 (...)`) but not that file, which the caller knows and names once (a
     /// scene file's report names the mesh files its warnings come from); a warning
     /// about another file (a material library) names it.
     pub messages: Vec<String>,
-    /// How many of `degenerate_faces` and `nonplanar_faces` a message already reports
-    /// along with the file they come from ([`LoadReport::merge_from_file`]):
-    /// [`LoadReport::warnings`] leaves them out of its own count lines.
-    named_in_messages: [usize; 2],
+    /// How many of `degenerate_faces`, `nonplanar_faces` and `self_intersecting_faces`
+    /// a message already reports along with the file they come from
+    /// ([`LoadReport::merge_from_file`]): [`LoadReport::warnings`] leaves them out of
+    /// its own count lines.
+    named_in_messages: [usize; 3],
 }
 
 impl LoadReport {
@@ -53,9 +63,11 @@ impl LoadReport {
         self.degenerate_faces += other.degenerate_faces;
         self.nonplanar_faces += other.nonplanar_faces;
         self.concave_faces += other.concave_faces;
+        self.self_intersecting_faces += other.self_intersecting_faces;
         self.messages.extend(other.messages.iter().cloned());
         self.named_in_messages[0] += other.named_in_messages[0];
         self.named_in_messages[1] += other.named_in_messages[1];
+        self.named_in_messages[2] += other.named_in_messages[2];
     }
 
     /// Adds the report of another file (a mesh placed by a scene file): its counts
@@ -68,6 +80,8 @@ impl LoadReport {
         self.concave_faces += other.concave_faces;
         self.named_in_messages[0] += other.degenerate_faces;
         self.named_in_messages[1] += other.nonplanar_faces;
+        self.self_intersecting_faces += other.self_intersecting_faces;
+        self.named_in_messages[2] += other.self_intersecting_faces;
         let file = file.display();
         self.messages
             .extend(other.warnings().into_iter().map(|w| format!("{file}: {w}")));
@@ -81,6 +95,12 @@ impl LoadReport {
         if degenerate > 0 {
             w.push(format!(
                 "{degenerate} degenerate face(s) (zero area or < 3 distinct vertices) dropped",
+            ));
+        }
+        let self_intersecting = self.self_intersecting_faces - self.named_in_messages[2];
+        if self_intersecting > 0 {
+            w.push(format!(
+                "{self_intersecting} self-intersecting face(s) (edges crossing, like a bow-tie quad) dropped",
             ));
         }
         let nonplanar = self.nonplanar_faces - self.named_in_messages[1];
@@ -250,6 +270,65 @@ pub const PLANARITY_TOLERANCE: f64 = 1e-6;
 /// diameter squared has zero area.
 pub const DEGENERACY_TOLERANCE: f64 = 1e-14;
 
+/// The largest face [`MeshBuilder`] checks for crossing edges (the test compares every
+/// pair of edges).
+pub const SELF_INTERSECTION_MAX_VERTICES: usize = 256;
+
+/// Whether two edges of a polygon that share no vertex cross or touch, in the plane of
+/// its largest triangle (`points` scaled near 1 by the caller). `false` for a polygon
+/// whose points are all collinear, and above [`SELF_INTERSECTION_MAX_VERTICES`].
+fn edges_cross(points: &[DVec3]) -> bool {
+    let n = points.len();
+    if !(4..=SELF_INTERSECTION_MAX_VERTICES).contains(&n) {
+        return false;
+    }
+    // The plane: the largest cross product of two edges from the first vertex (the
+    // Newell normal of a bow-tie can be zero).
+    let o = points[0];
+    let mut normal = DVec3::ZERO;
+    for i in 1..n - 1 {
+        let c = (points[i] - o).cross(points[i + 1] - o);
+        if c.length_squared() > normal.length_squared() {
+            normal = c;
+        }
+    }
+    if normal == DVec3::ZERO {
+        return false;
+    }
+    // Project along the normal's largest axis.
+    let a = normal.abs();
+    let (u, v) = if a.x >= a.y && a.x >= a.z {
+        (1, 2)
+    } else if a.y >= a.z {
+        (2, 0)
+    } else {
+        (0, 1)
+    };
+    let q: Vec<(f64, f64)> = points.iter().map(|p| (p[u], p[v])).collect();
+    let orient = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
+        (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+    };
+    for i in 0..n {
+        let (a, b) = (q[i], q[(i + 1) % n]);
+        // Edges that share no vertex with edge i: j from i + 2, and not the edge
+        // before i (which is edge n - 1 when i = 0).
+        for j in i + 2..n {
+            if i == 0 && j == n - 1 {
+                continue;
+            }
+            let (c, d) = (q[j], q[(j + 1) % n]);
+            let (d1, d2) = (orient(a, b, c), orient(a, b, d));
+            let (d3, d4) = (orient(c, d, a), orient(c, d, b));
+            // Strictly opposite signs (compared, not multiplied: no underflow).
+            let apart = |x: f64, y: f64| (x < 0.0 && y > 0.0) || (x > 0.0 && y < 0.0);
+            if apart(d1, d2) && apart(d3, d4) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
 /// Whether a triangle has zero area by [`DEGENERACY_TOLERANCE`], at any scale.
 fn triangle_is_degenerate(a: DVec3, b: DVec3, c: DVec3) -> bool {
     let test = |p: &[DVec3]| {
@@ -268,13 +347,16 @@ fn triangle_is_degenerate(a: DVec3, b: DVec3, c: DVec3) -> bool {
 
 /// The power of two that brings the points' largest coordinate near 1, when their own
 /// scale can overflow or underflow the products of the face tests (a coordinate
-/// beyond 1e150, or all below 1e-150; the tests are scale-free otherwise). `None`
-/// for a normal scale, or zero or not finite.
+/// beyond 1e60, or all below 1e-60; the tests are scale-free otherwise). The tests
+/// square lengths of cross products, fourth powers of the coordinates: with the
+/// former bounds of 1e150, a triangle 1e-100 across had a squared normal of 1e-400,
+/// zero, and was dropped as of zero area while one of 1e-200 (normalized) was kept.
+/// `None` for a normal scale, or zero or not finite.
 fn normalizing_scale(points: &[DVec3]) -> Option<f64> {
     let s = points
         .iter()
         .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
-    if !(s.is_finite() && s > 0.0) || (1e-150..=1e150).contains(&s) {
+    if !(s.is_finite() && s > 0.0) || (1e-60..=1e60).contains(&s) {
         return None;
     }
     // A power of two: the scaling itself rounds nothing (short of subnormals).
@@ -422,7 +504,12 @@ impl MeshBuilder {
             .extent()
             .length();
         if !(normal.length() * 0.5 > DEGENERACY_TOLERANCE * diameter * diameter) {
-            self.report.degenerate_faces += 1;
+            // Zero area: collinear, or lobes of opposite turn that cancel (a bow-tie).
+            if edges_cross(points) {
+                self.report.self_intersecting_faces += 1;
+            } else {
+                self.report.degenerate_faces += 1;
+            }
             return FaceOutcome::Dropped;
         }
         let scratch = std::mem::take(&mut self.scratch);
@@ -434,6 +521,9 @@ impl MeshBuilder {
             if planar && geom::is_convex(points) {
                 self.emit(&scratch, face);
                 FaceOutcome::Kept
+            } else if planar && edges_cross(points) {
+                self.report.self_intersecting_faces += 1;
+                FaceOutcome::Dropped
             } else {
                 if planar {
                     self.report.concave_faces += 1;
@@ -552,7 +642,9 @@ mod tests {
         // (areas, squared diameters) underflowed or overflowed, so every face was
         // dropped as degenerate and a file of huge coordinates was reported empty
         // instead of out of range.
-        for k in [1e-200, 1.0, 1e200, 1e308] {
+        for k in [
+            1e-200, 1e-100, 1e-70, 1e-40, 1.0, 1e40, 1e70, 1e100, 1e200, 1e308,
+        ] {
             let mut b = builder(&[
                 (0., 0., 0.),
                 (k, 0., 0.),
@@ -587,6 +679,56 @@ mod tests {
             let (m, r) = b.finish();
             assert_eq!(r.degenerate_faces, 2, "{k}");
             assert_eq!(m.polygon_count(), 5, "{k}");
+        }
+    }
+
+    #[test]
+    fn self_intersecting_faces_are_named_not_taken_for_zero_area() {
+        for k in [1e-200, 1e-100, 1e-20, 1.0, 1e20, 1e200] {
+            // 0..3: a bow-tie's corners (its Newell area is zero: two lobes of opposite
+            // turn), 4: the tip of a pentagram with 0..3, 5..9: a pentagram.
+            let star: Vec<(f64, f64, f64)> = (0..5)
+                .map(|i| {
+                    let a = std::f64::consts::TAU * f64::from(i * 2 % 5) / 5.0;
+                    (a.cos() * k, a.sin() * k, 0.0)
+                })
+                .collect();
+            let mut pts = vec![(0.0, 0.0, 0.0), (k, k, 0.0), (k, 0.0, 0.0), (0.0, k, 0.0)];
+            pts.push((2.0 * k, 2.0 * k, 0.0));
+            pts.extend(star);
+            let mut b = builder(&pts);
+            // Bow-tie with equal lobes: zero Newell area.
+            assert_eq!(b.push_face(&[0, 1, 2, 3], None), Ok(FaceOutcome::Dropped));
+            // Pentagram: non-zero Newell area, edges crossing.
+            assert_eq!(
+                b.push_face(&[5, 6, 7, 8, 9], None),
+                Ok(FaceOutcome::Dropped),
+                "{k}"
+            );
+            // The same corners in order: a square, kept.
+            assert_eq!(b.push_face(&[0, 2, 1, 3], None), Ok(FaceOutcome::Kept));
+            // Concave but simple (a dart): triangulated as before.
+            assert_eq!(
+                b.push_face(&[0, 2, 1, 4, 3], None),
+                Ok(FaceOutcome::Triangulated(3)),
+                "{k}"
+            );
+            // Collinear: degenerate, not self-intersecting.
+            assert_eq!(b.push_face(&[0, 1, 4, 1], None), Ok(FaceOutcome::Dropped));
+            let (m, r) = b.finish();
+            assert_eq!(
+                (r.self_intersecting_faces, r.degenerate_faces),
+                (2, 1),
+                "{k}"
+            );
+            assert_eq!(m.face_count(), 5);
+            assert!(
+                r.warnings()
+                    .iter()
+                    .any(|w| w.contains("2 self-intersecting")),
+                "{:?}",
+                r.warnings()
+            );
         }
     }
 

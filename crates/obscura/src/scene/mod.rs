@@ -28,6 +28,39 @@ pub use camera::{Camera, Projection, Ray, Viewport};
 /// their arithmetic (differences, products of two coordinates) finite. Larger values
 /// are refused with an error naming the object or the camera.
 pub const MAX_COORDINATE: f64 = 1e30;
+
+/// The smallest size of an object (the largest side of its box in world coordinates,
+/// for an object with faces) that obscura accepts: `1e-30`, `1 / MAX_COORDINATE`. Products of
+/// coordinates (plane normals, the ray casters' edge functions, the octree's
+/// separating axes) are powers of a scene's size up to the fourth, and the BVH's
+/// boxes are single precision: below this they lose their precision to underflow
+/// (a triangle 1e-100 across squared its normal to zero). Smaller objects are refused
+/// by [`Scene::add`] with an error naming the object and both sizes.
+pub const MIN_EXTENT: f64 = 1e-30;
+
+/// Whether the linear part of an affine transform is singular, judged on its columns
+/// scaled to a largest entry of 1 each: a determinant that only overflows or
+/// underflows (a scale of 1e200 or 1e-200 cubed) is not singular, one whose columns
+/// are dependent is. Returns the sign of the determinant (`-1` mirrors), `None` when
+/// singular or not finite.
+#[must_use]
+pub fn transform_orientation(m: &DMat4) -> Option<f64> {
+    let cols = [
+        m.x_axis.truncate(),
+        m.y_axis.truncate(),
+        m.z_axis.truncate(),
+    ];
+    let mut n = [DVec3::ZERO; 3];
+    for (k, c) in cols.iter().enumerate() {
+        let big = c.abs().max_element();
+        if !(big > 0.0 && big.is_finite()) {
+            return None;
+        }
+        n[k] = *c / big;
+    }
+    let det = n[0].dot(n[1].cross(n[2]));
+    (det != 0.0 && det.is_finite()).then(|| det.signum())
+}
 pub use mesh::{
     DEGENERACY_TOLERANCE, FaceError, FaceOutcome, LoadReport, Material, Mesh, MeshBuilder,
     PLANARITY_TOLERANCE,
@@ -222,12 +255,11 @@ impl Scene {
                 last_row.to_array()
             )));
         }
-        let det = desc.transform.determinant();
-        if det == 0.0 || !det.is_finite() {
+        let Some(orientation) = transform_orientation(&desc.transform) else {
             return Err(invalid(
                 "the transform is singular (flattens the object)".into(),
             ));
-        }
+        };
         // Messages name vertices by index, not value: the values may come from a file
         // other than the one whose loader reports the error (a glTF's buffer).
         if let Some(i) = desc.mesh.positions().iter().position(|p| !p.is_finite()) {
@@ -259,6 +291,14 @@ impl Scene {
             )));
         }
         let bounds = Aabb::from_points(world.iter().copied());
+        let extent = bounds.extent().max_element();
+        if !bounds.is_empty() && extent < MIN_EXTENT {
+            return Err(invalid(format!(
+                "it is {extent:.1e} across (after its transform), below the smallest size \
+                 accepted, {MIN_EXTENT:e}: products of its coordinates would underflow \
+                 (scale it up; the whole scene may be scaled alike)"
+            )));
+        }
         let sphere = Sphere::bounding(&world).unwrap_or(Sphere {
             center: DVec3::ZERO,
             radius: 0.0,
@@ -286,7 +326,7 @@ impl Scene {
             closed,
             convex,
             first_face,
-            mirrored: det < 0.0,
+            mirrored: orientation < 0.0,
             bounds,
             sphere,
         });

@@ -6,9 +6,10 @@
 //! (1)-(2)" (the octree as a hierarchical subdivision of space; occlusion decided by the
 //! order of the cells).
 //!
-//! - Input: a [`PreparedView`]; the octree is built from its scene in world space
-//!   ([`Octree::from_scene`], depth [`RenderOptions::octree_depth`]) and viewed with its
-//!   camera. The prepared polygons are not used: the octree is an object-space
+//! - Input: a [`PreparedView`]; the octree is built from its scene in world space, or
+//!   relative to the scene's centre when the scene lies far from the origin beside its
+//!   size ([`Octree::from_scene`], depth [`RenderOptions::octree_depth`]: the same image
+//!   at any offset) and viewed with its camera. The prepared polygons are not used: the octree is an object-space
 //!   representation of its own.
 //! - Output: a [`Frame`]. Per pixel, the world-space ray of the pixel centre
 //!   ([`crate::scene::Camera::ray`]) walks the tree front to back

@@ -85,7 +85,7 @@ impl BooleanOp {
 impl Octree {
     /// Combines two trees over the same region and depth by parallel traversal.
     pub fn combine(&self, other: &Octree, op: BooleanOp) -> Result<Octree> {
-        if self.region != other.region || self.depth != other.depth {
+        if self.region != other.region || self.frame != other.frame || self.depth != other.depth {
             return Err(Error::option(
                 "octree boolean",
                 format!(
@@ -122,6 +122,7 @@ impl Octree {
         }
         Ok(Octree {
             region: self.region,
+            frame: self.frame,
             depth: self.depth,
             nodes: compact(&raw),
             build_stats: super::BuildStats::default(),

@@ -684,6 +684,7 @@ impl Octree {
         let compact_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(Octree {
             region,
+            frame: DVec3::ZERO,
             depth,
             nodes,
             build_stats: BuildStats {
@@ -700,19 +701,54 @@ impl Octree {
         })
     }
 
-    /// Voxelizes a scene over [`Region::enclosing`] its bounds. A scene with no
-    /// triangle gives a single Empty leaf over the unit cube.
+    /// Voxelizes a scene over [`Region::enclosing`] its bounds, in the scene's own
+    /// frame when it lies far from the origin beside its size (see "Frame" in the
+    /// module documentation, [`Octree::frame_origin`]). A scene with no triangle gives
+    /// a single Empty leaf over the unit cube.
     pub fn from_scene(scene: &Scene, depth: u32) -> Result<Octree> {
         check_depth(depth)?;
         let start = Instant::now();
-        let soup = TriangleSoup::from_scene(scene);
+        let mut soup = TriangleSoup::from_scene(scene);
+        let bounds = soup.bounds();
+        let frame = scene_frame(&bounds);
+        if frame != DVec3::ZERO {
+            soup.translate(-frame);
+        }
         let triangles_ms = start.elapsed().as_secs_f64() * 1e3;
         let mut tree = match Region::enclosing(&soup.bounds()) {
             Some(region) => Octree::build(&soup, region, depth)?,
             None => Octree::uniform(Region::new(DVec3::ZERO, 1.0)?, depth, Leaf::Empty)?,
         };
+        tree.frame = frame;
         tree.build_stats.triangles_ms = triangles_ms;
         Ok(tree)
+    }
+}
+
+/// The origin of the frame a scene with these bounds is voxelized in: the centre of
+/// the box when it lies farther from the origin than the box's largest extent (the
+/// world frame would round cell boxes to the coordinates' magnitude), else zero.
+pub(crate) fn scene_frame(bounds: &Aabb) -> DVec3 {
+    if bounds.is_empty() || !(bounds.min.is_finite() && bounds.max.is_finite()) {
+        return DVec3::ZERO;
+    }
+    let centre = bounds.center();
+    if centre.abs().max_element() > bounds.extent().max_element() {
+        centre
+    } else {
+        DVec3::ZERO
+    }
+}
+
+impl TriangleSoup {
+    /// Moves every triangle (and the objects' boxes) by `by`.
+    fn translate(&mut self, by: DVec3) {
+        for t in &mut self.triangles {
+            *t = t.map(|v| v + by);
+        }
+        for o in &mut self.objects {
+            o.bounds = Aabb::from_points(self.triangles[o.start..o.end].iter().flatten().copied());
+        }
     }
 }
 

@@ -19,8 +19,8 @@
 //!   next one from the plane the previous one is left by (the state machine of Revelles,
 //!   Ureña and Lastra, 2000). In mirrored space that step only ever sets a bit, which is
 //!   the front-to-back order above. Zero direction components are replaced by a tiny
-//!   positive one (1e-100), which keeps every parameter finite and the ray's side of
-//!   each plane right.
+//!   positive one (1e-100 of the largest component), which keeps every parameter
+//!   finite and the ray's side of each plane right.
 //! - Full leaves are passed through: a ray from outside the solids meets a Partial
 //!   voxel before any Full one (Full and Empty cells never touch), so only a ray that
 //!   starts inside a solid reaches a Full leaf first; it goes on to the solid's boundary
@@ -70,7 +70,8 @@ struct Walk {
 impl Octree {
     /// The first Partial voxel that the ray `origin + t direction` meets for `t` in
     /// `[t_min, t_max]`, and the number of nodes entered on the way. Non-finite input,
-    /// a zero direction and an empty interval meet nothing.
+    /// a zero direction and an empty interval meet nothing. The ray is in world
+    /// coordinates: it is moved into the tree's frame ([`Octree::frame_origin`]) first.
     #[must_use]
     pub fn first_hit(
         &self,
@@ -85,11 +86,15 @@ impl Octree {
         {
             return (None, 0);
         }
+        let origin = origin - self.frame;
         let mask = negative_mask(direction);
         let (lo, hi) = (self.region.min(), self.region.max());
         // Mirror the axes with a negative component through the region's centre.
         let mirrored = DVec3::select(direction.cmplt(DVec3::ZERO), lo + hi - origin, origin);
-        let inv = DVec3::ONE / direction.abs().max(DVec3::splat(1e-100));
+        // Relative to the direction's length, so that the stand-in for a zero
+        // component gives parameters far beyond every real one at any scale.
+        let tiny = direction.abs().max_element() * 1e-100;
+        let inv = DVec3::ONE / direction.abs().max(DVec3::splat(tiny));
         let t0 = (lo - mirrored) * inv;
         let t1 = (hi - mirrored) * inv;
         let mut walk = Walk {

@@ -79,7 +79,7 @@ struct SceneFile {
 struct CameraSpec {
     eye: [f64; 3],
     target: [f64; 3],
-    up: Option<[f64; 3]>,
+    up: Option<Spanned<[f64; 3]>>,
     fov: Option<f64>,
     ortho_height: Option<f64>,
     near: Option<f64>,
@@ -161,6 +161,7 @@ pub(crate) fn load_in(path: &Path, sources: &mut Sources<'_>) -> Result<Scene> {
     SceneReader {
         path,
         line_starts: super::LineIndex::new(&text),
+        text: &text,
         dir: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         cache: HashMap::new(),
         primitive_faces: std::cell::Cell::new(0),
@@ -182,6 +183,8 @@ struct SceneReader<'a, 'o> {
     /// Finds the line of a span in O(log lines) (counting the newlines before it for
     /// every referenced mesh file made many files quadratic).
     line_starts: super::LineIndex,
+    /// The file's text (element spans inside an array are found in it).
+    text: &'a str,
     /// What the load may read and has read.
     sources: &'a mut Sources<'o>,
     dir: PathBuf,
@@ -595,12 +598,26 @@ impl SceneReader<'_, '_> {
                 ));
             }
             let v = matrix.get_ref();
-            if v.len() != 16 || !v.iter().all(|x| x.is_finite()) {
+            if v.len() != 16 {
                 return Err(self.error(
                     &matrix.span(),
                     format!(
                         "matrix needs 16 finite numbers (row-major 4x4), found {}",
                         v.len()
+                    ),
+                ));
+            }
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                let at = element_span(self.text, &matrix.span(), k);
+                return Err(self.error(
+                    &at,
+                    format!(
+                        "matrix entry {} (row {}, column {}) is {}: the 16 numbers must be \
+                         finite",
+                        k + 1,
+                        k / 4 + 1,
+                        k % 4 + 1,
+                        v[k]
                     ),
                 ));
             }
@@ -640,6 +657,27 @@ impl SceneReader<'_, '_> {
                             ),
                         ));
                     }
+                    // A factor as large as coordinates may be, or as small as objects.
+                    let (lo, hi) = (crate::scene::MIN_EXTENT, crate::scene::MAX_COORDINATE);
+                    if let Some(f) = sv
+                        .to_array()
+                        .into_iter()
+                        .find(|f| !(lo..=hi).contains(&f.abs()))
+                    {
+                        let what = if f.abs() > hi {
+                            "overflow"
+                        } else {
+                            "underflow"
+                        };
+                        return Err(self.error(
+                            &v.span(),
+                            format!(
+                                "scale factor {f:e} is out of the range accepted, {lo:e} to \
+                                 {hi:e} in magnitude: the object's coordinates (and their \
+                                 products) would {what}"
+                            ),
+                        ));
+                    }
                     sv
                 }
             };
@@ -649,17 +687,26 @@ impl SceneReader<'_, '_> {
                 * DMat4::from_rotation_x(r.x.to_radians())
                 * DMat4::from_scale(scale)
         };
-        let det = m.determinant();
-        if !(det.is_finite() && det != 0.0) {
-            let at = s.matrix.as_ref().map_or(span.clone(), Spanned::span);
+        if crate::scene::transform_orientation(&m).is_none() {
+            // Judged on scaled columns: only dependent columns are singular, not a
+            // determinant that overflows. Pointed at the key that made it.
+            let at = [
+                s.matrix.as_ref().map(Spanned::span),
+                s.scale.as_ref().map(Spanned::span),
+                s.rotate.as_ref().map(Spanned::span),
+            ]
+            .into_iter()
+            .flatten()
+            .next()
+            .unwrap_or_else(|| span.clone());
             return Err(self.error(&at, "the transform is singular (it flattens the object)"));
         }
         Ok(m)
     }
 
     fn direction(&self, v: &[f64; 3], span: &Range<usize>, what: &str) -> Result<DVec3> {
-        let d = DVec3::from_array(*v);
-        if d.is_finite() && d.length() > 0.0 {
+        // Any length: 1e308 or 1e-300 is scaled before it is normalized.
+        if let Some(d) = crate::geom::unit_direction(DVec3::from_array(*v)) {
             Ok(d)
         } else {
             Err(self.error(
@@ -683,7 +730,10 @@ impl SceneReader<'_, '_> {
         };
         let eye = DVec3::from_array(c.eye);
         let target = DVec3::from_array(c.target);
-        let up = c.up.map_or(scene.up(), DVec3::from_array);
+        let up = match &c.up {
+            Some(u) => self.direction(u.get_ref(), &u.span(), "[camera] up")?,
+            None => scene.up(),
+        };
         let mut camera = Camera {
             eye,
             target,
@@ -704,6 +754,32 @@ impl SceneReader<'_, '_> {
             .map_err(|e| self.error(span, format!("[camera]: {e}")))?;
         Ok(camera)
     }
+}
+
+/// The span of the first character of element `k` (from 0) of the array at `span` in
+/// `text`, for its line (the whole array when it cannot be found).
+fn element_span(text: &str, span: &Range<usize>, k: usize) -> Range<usize> {
+    let Some(body) = text.get(span.clone()) else {
+        return span.clone();
+    };
+    let (mut depth, mut index, mut comment) = (0usize, 0usize, false);
+    for (i, c) in body.char_indices() {
+        if comment {
+            comment = c != '\n';
+            continue;
+        }
+        match c {
+            '#' => comment = true,
+            '[' => depth += 1,
+            ']' => depth = depth.saturating_sub(1),
+            ',' if depth == 1 => index += 1,
+            c if depth == 1 && index == k && !c.is_whitespace() => {
+                return span.start + i..span.start + i + 1;
+            }
+            _ => {}
+        }
+    }
+    span.clone()
 }
 
 /// Adds "referenced from scene.toml:N" to an error from a referenced file, keeping the
