@@ -100,7 +100,9 @@ fn a_mesh_near_the_coordinate_limit_is_framed_or_refused_by_name() {
     // The binary form the fuzzer found: one facet whose x reaches -6.3e29.
     let mut stl = vec![b' '; 80];
     stl.extend_from_slice(&1u32.to_le_bytes());
-    for v in [0.0f32, 0.0, 1.0, 0.0, 0.0, 0.0, -6.3e29, 0.0, 0.0, 0.0, 1.0, 0.0] {
+    for v in [
+        0.0f32, 0.0, 1.0, 0.0, 0.0, 0.0, -6.3e29, 0.0, 0.0, 0.0, 1.0, 0.0,
+    ] {
         stl.extend_from_slice(&v.to_le_bytes());
     }
     stl.extend_from_slice(&[0, 0]);
