@@ -250,8 +250,20 @@ impl ViewArgs {
     /// eye or target is overridden and near/far are not given, they are fitted to the
     /// scene's bounds along the new view direction.
     pub fn camera(&self, scene: &Scene, viewport: Viewport) -> Result<Camera> {
-        let base = scene.default_camera(viewport.aspect());
         let moved = self.eye.is_some() || self.target.is_some() || self.up.is_some();
+        let base = if moved || self.ortho.is_some() || self.fov.is_some() {
+            scene.default_camera(viewport.aspect())
+        } else {
+            // No camera option given: a scene no camera in range can frame is said to
+            // be so, with the scene named, not left to "invalid camera".
+            scene.automatic_camera(viewport.aspect()).map_err(|e| match e {
+                Error::InvalidCamera(m) => Error::InvalidCamera(format!(
+                    "{}: {m} (--eye, --target, --near, --far)",
+                    self.scene.as_deref().unwrap_or("demo:default")
+                )),
+                e => e,
+            })?
+        };
         let mut cam = Camera {
             eye: self.eye.unwrap_or(base.eye),
             target: self.target.unwrap_or(base.target),

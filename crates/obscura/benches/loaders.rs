@@ -263,7 +263,7 @@ fn obj_continued_lines(n: usize) -> Files {
     }
     s.push('f');
     for k in 1..=n {
-        let _ = write!(s, " {k} \\\n");
+        let _ = writeln!(s, " {k} \\");
     }
     s.push('\n');
     one("continued.obj", s)
@@ -553,7 +553,7 @@ fn time(path: &Path) -> f64 {
     {
         let cpu = cpu_ms();
         let start = Instant::now();
-        let scene = obscura::scene::load::load_file(&path)
+        let scene = obscura::scene::load::load_file(path)
             .unwrap_or_else(|e| panic!("bench input {} should load: {e}", path.display()));
         let wall = start.elapsed().as_secs_f64() * 1e3;
         let ms = match (cpu, cpu_ms()) {

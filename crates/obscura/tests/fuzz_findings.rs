@@ -44,14 +44,20 @@ impl Drop for TempDir {
 /// the z-buffer renders it at 64x48.
 fn frame_and_render(path: &Path, scene: &Scene) {
     let viewport = Viewport::new(64, 48).unwrap();
-    let camera = scene.default_camera(viewport.aspect());
-    if let Err(e) = camera.validate() {
-        panic!(
-            "{} loaded, but its default camera is invalid: {e} (bounds {:?})",
-            path.display(),
-            scene.bounds()
-        );
-    }
+    let camera = match scene.automatic_camera(viewport.aspect()) {
+        Ok(camera) => camera,
+        Err(e) => {
+            // A scene no camera within range can frame must say so, not leave an
+            // invalid camera for `prepare` to refuse without a word about why.
+            let m = e.to_string();
+            assert!(
+                m.contains("the automatic camera cannot frame the scene"),
+                "{}: {m}",
+                path.display()
+            );
+            return;
+        }
+    };
     let view = obscura::prepare(scene, &camera, viewport, &PrepareOptions::default())
         .unwrap_or_else(|e| panic!("{}: prepare failed: {e}", path.display()));
     obscura::render(Algorithm::ZBuffer, &view, &Default::default())
@@ -85,10 +91,10 @@ fn load_or_refuse(path: &Path) -> Option<Scene> {
 /// was refused ("invalid camera: eye ... beyond the largest coordinate accepted", or
 /// "near ... or far ... beyond the largest distance accepted"), naming neither the file
 /// nor anything the user gave. The fuzzer found binary STLs; this is the same class
-/// as an ASCII file of one triangle. Issue 21 sections 5 and 6 (the range of
-/// coordinates and messages about it) are another branch's; this test waits for it.
+/// as an ASCII file of one triangle. Now the automatic camera frames it from the
+/// origin's side where that stays in range, and otherwise `Scene::automatic_camera`
+/// says that no camera in range frames the scene (the CLI adds the scene's name).
 #[test]
-#[ignore = "issue 21 sections 5-6 (numbers branch): un-ignore after merging it"]
 fn a_mesh_near_the_coordinate_limit_is_framed_or_refused_by_name() {
     let dir = TempDir::new("stl-far");
     let path = dir.write(

@@ -452,6 +452,28 @@ impl Scene {
         self.camera
             .unwrap_or_else(|| Camera::framing(&self.bounds(), aspect, self.up(), 45.0))
     }
+
+    /// [`Scene::default_camera`], checked: a scene with no camera of its own so close
+    /// to [`MAX_COORDINATE`] that no eye within that range frames it (a triangle
+    /// reaching 9e29) gets an error that says so, instead of a camera whose eye or
+    /// planes are out of range, which [`Camera::validate`] would refuse without saying
+    /// that no one gave that camera.
+    pub fn automatic_camera(&self, aspect: f64) -> Result<Camera> {
+        let camera = self.default_camera(aspect);
+        match camera.validate() {
+            Ok(()) => Ok(camera),
+            Err(Error::InvalidCamera(e)) if self.camera.is_none() => {
+                let b = self.bounds();
+                Err(Error::InvalidCamera(format!(
+                    "the automatic camera cannot frame the scene (bounds {:e}..{:e} on x, \
+                     {:e}..{:e} on y, {:e}..{:e} on z): {e}; give a camera whose eye, target, \
+                     near and far lie within {MAX_COORDINATE:e}",
+                    b.min.x, b.max.x, b.min.y, b.max.y, b.min.z, b.max.z
+                )))
+            }
+            Err(e) => Err(e),
+        }
+    }
 }
 
 #[cfg(test)]

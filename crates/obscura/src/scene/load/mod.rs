@@ -39,8 +39,14 @@
 //!   message carries the warnings that explain why (nodes skipped, primitives that are
 //!   not surfaces, faces dropped).
 //!
-//! Complexity: every loader is linear in the file size (plus the hashing of vertex
-//! positions where a format needs welding). Files are read whole into memory.
+//! Complexity: every loader is linear in the size of its input, whatever the input
+//! has many of (objects, groups, solids, header lines, materials, `usemtl` switches,
+//! nodes, nesting depth, referenced files, corners on one line), plus the hashing of
+//! vertex positions where a format needs welding: nothing is looked up by a linear
+//! search, re-counted from the start, reset per object or read twice.
+//! `cargo bench -p obscura --bench loaders` shows it, loading 23 such shapes at N and
+//! 4N items and printing the ratio of the times. Files are read whole into memory.
+//! (Triangulating one concave n-gon is the exception, bounded as `MeshBuilder` says.)
 
 pub mod gltf;
 pub mod mtl;

@@ -527,17 +527,17 @@ impl Body<'_> {
 
     /// Skips every element of `def` (not needed by the mesh).
     fn skip(&mut self, def: &ElementDef, corners: &mut Vec<i64>) -> Result<()> {
-        if self.encoding != Encoding::Ascii {
-            if let Some(size) = def.fixed_size() {
-                let total = size.checked_mul(def.count);
-                let left = (self.bytes.len() - self.at) as u64;
-                if total.is_none_or(|t| t > left) {
-                    let index = left / size.max(1);
-                    return Err(self.error(def, index, 0, self.truncated(def, index)));
-                }
-                self.at += total.unwrap_or(0) as usize;
-                return Ok(());
+        if self.encoding != Encoding::Ascii
+            && let Some(size) = def.fixed_size()
+        {
+            let total = size.checked_mul(def.count);
+            let left = (self.bytes.len() - self.at) as u64;
+            if total.is_none_or(|t| t > left) {
+                let index = left / size.max(1);
+                return Err(self.error(def, index, 0, self.truncated(def, index)));
             }
+            self.at += total.unwrap_or(0) as usize;
+            return Ok(());
         }
         if def.properties.is_empty() {
             return Ok(()); // an element without properties takes no line
