@@ -32,11 +32,11 @@ pub struct BenchArgs {
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = crate::common::parse_algo)]
     pub algos: Option<Vec<Algorithm>>,
     /// The largest face count of the sweep, 1 to 10,000,000.
-    #[arg(long, default_value_t = 1_000_000, value_parser = parse_max_faces, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = parse_max_faces, allow_hyphen_values = true)]
     pub max_faces: usize,
     /// Seconds an algorithm may take for one size (a positive number); sizes predicted to
     /// take longer are skipped.
-    #[arg(long, default_value_t = 60.0, value_parser = parse_budget, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 60.0, value_parser = parse_budget, allow_hyphen_values = true)]
     pub budget: f64,
     #[command(flatten)]
     pub tuning: AlgoArgs,
@@ -209,10 +209,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         args.view
             .threads
             .map_or_else(|| "all".to_string(), |t| t.to_string()),
-        args.budget
+        crate::common::readable(args.budget)
     );
     let mut results: Vec<(Algorithm, Vec<(usize, f64)>)> =
         algos.iter().map(|&a| (a, Vec::new())).collect();
+    for w in args.tuning.unused_warnings(&algos) {
+        errln!("warning: {w}");
+    }
     let options = args.tuning.options_with_budget(args.view.memory_limit);
     // Per algorithm, the sizes skipped for the memory budget, with the reason.
     let mut skipped: Vec<(Algorithm, usize, String)> = Vec::new();

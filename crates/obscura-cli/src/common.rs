@@ -20,7 +20,7 @@ pub struct ViewArgs {
     #[arg(value_name = "SCENE", value_parser = clap::builder::OsStringValueParser::new().try_map(parse_scene))]
     pub scene: Option<String>,
     /// Image size in pixels, WIDTHxHEIGHT (each side at most 16384).
-    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    #[arg(long, value_name = "WxH", value_parser = parse_size, allow_hyphen_values = true)]
     pub size: Option<(u64, u64)>,
     /// Eye position x,y,z (default: the scene's camera, or one framing its bounds).
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
@@ -32,22 +32,24 @@ pub struct ViewArgs {
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
     pub up: Option<DVec3>,
     /// Vertical field of view in degrees (perspective).
-    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    #[arg(long, value_name = "DEG", value_parser = parse_number, allow_hyphen_values = true)]
     pub fov: Option<f64>,
     /// Near clipping distance (default: fitted to the scene).
-    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    #[arg(long, value_name = "N", value_parser = parse_number, allow_hyphen_values = true)]
     pub near: Option<f64>,
     /// Far clipping distance (default: fitted to the scene).
-    #[arg(long, value_name = "F", allow_negative_numbers = true)]
+    #[arg(long, value_name = "F", value_parser = parse_number, allow_hyphen_values = true)]
     pub far: Option<f64>,
-    /// Orthographic projection showing this height of the world.
-    #[arg(long, value_name = "HEIGHT", allow_negative_numbers = true)]
+    /// Orthographic projection showing this height of the world (not with --fov, which
+    /// is for a perspective projection).
+    #[arg(long, value_name = "HEIGHT", value_parser = parse_number, allow_hyphen_values = true,
+          conflicts_with = "fov")]
     pub ortho: Option<f64>,
     /// Keep back faces (by default they are culled on closed objects).
     #[arg(long)]
     pub no_backface: bool,
-    /// Worker threads, at most 1024 (default: all cores; 1 for single-thread figures).
-    #[arg(long, value_name = "N", value_parser = parse_threads, allow_negative_numbers = true)]
+    /// Worker threads, 1 to 1024 (default: all cores; 1 for single-thread figures).
+    #[arg(long, value_name = "N", value_parser = parse_threads, allow_hyphen_values = true)]
     pub threads: Option<usize>,
     /// Let the scene read files outside its own folder: absolute paths, `..`, symbolic
     /// links leading out, file: URIs in its glTF buffers, OBJ mtllib lines and scene-file
@@ -75,8 +77,8 @@ pub struct AlgoArgs {
     /// the 1M-triangle demo:sphere takes 12 MB, but depth 10 on a scene of many large
     /// overlapping triangles (demo:triangles) would take minutes and over 5 GB: a tree
     /// whose estimate passes the memory budget (--memory-limit) is refused up front.
-    #[arg(long, value_name = "DEPTH", default_value_t = 7, value_parser = parse_octree_depth,
-          allow_negative_numbers = true)]
+    #[arg(long, value_name = "DEPTH", default_value_t = DEFAULT_OCTREE_DEPTH, value_parser = parse_octree_depth,
+          allow_hyphen_values = true)]
     pub octree_depth: u32,
     /// BSP traversal: front-to-back (write each pixel once, stop when the image is
     /// full) or back-to-front (the painter's algorithm).
@@ -85,6 +87,45 @@ pub struct AlgoArgs {
 }
 
 impl AlgoArgs {
+    /// Warnings for tuning flags changed from their defaults that none of `algos`
+    /// reads (e.g. `--octree-depth` without the octree): such a flag would otherwise be
+    /// ignored without a word.
+    pub fn unused_warnings(&self, algos: &[Algorithm]) -> Vec<String> {
+        let runs = |a: Algorithm| algos.contains(&a);
+        let mut out = Vec::new();
+        let mut unused = |flag: &str, value: String, user: Algorithm| {
+            if !runs(user) {
+                out.push(format!(
+                    "{flag} {value} has no effect: only the {} algorithm uses it, and it does \
+                     not run here",
+                    user.name()
+                ));
+            }
+        };
+        if self.octree_depth != DEFAULT_OCTREE_DEPTH {
+            unused(
+                "--octree-depth",
+                self.octree_depth.to_string(),
+                Algorithm::Octree,
+            );
+        }
+        if self.bounds != BoundsKind::Aabb {
+            unused(
+                "--bounds",
+                format!("{:?}", self.bounds).to_lowercase(),
+                Algorithm::RaycastBounds,
+            );
+        }
+        if self.bsp_traversal != BspTraversal::FrontToBack {
+            unused(
+                "--bsp-traversal",
+                "back-to-front".to_owned(),
+                Algorithm::Bsp,
+            );
+        }
+        out
+    }
+
     /// The library's options from these flags.
     pub fn options(&self) -> RenderOptions {
         RenderOptions::default()
@@ -130,6 +171,19 @@ fn parse_scene(s: std::ffi::OsString) -> std::result::Result<String, String> {
     })
 }
 
+/// The default of `--octree-depth`.
+pub const DEFAULT_OCTREE_DEPTH: u32 = 7;
+
+/// A finite number for a camera flag (`--fov`, `--near`, `--far`, `--ortho`): each flag
+/// takes values that start with `-` so that this parser, not clap's `-- -5` hint,
+/// answers; the camera's own check then says which range the flag needs.
+pub fn parse_number(s: &str) -> std::result::Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        _ => Err(format!("\"{s}\" is not a finite number")),
+    }
+}
+
 /// The same check for every subcommand, at parsing: `compare` and `bench` only reported
 /// a bad depth as one algorithm's error and ended with status 0.
 pub fn parse_octree_depth(s: &str) -> std::result::Result<u32, String> {
@@ -155,11 +209,18 @@ pub fn parse_bsp_traversal(s: &str) -> std::result::Result<BspTraversal, String>
 /// pool of 100,000 threads takes minutes just to start).
 pub const MAX_THREADS: usize = 1024;
 
+/// `--threads`: 1 to [`MAX_THREADS`]. Zero is refused rather than read as "all cores"
+/// (which leaving the flag out means), so no message can print "0 threads".
 pub fn parse_threads(s: &str) -> std::result::Result<usize, String> {
     let n: usize = s
         .trim()
         .parse()
-        .map_err(|_| format!("\"{s}\" is not a whole number of threads"))?;
+        .map_err(|_| format!("\"{s}\" is not a whole number of threads from 1 to {MAX_THREADS}"))?;
+    if n == 0 {
+        return Err(format!(
+            "0 threads: give 1 to {MAX_THREADS}, or leave --threads out to use every core"
+        ));
+    }
     if n > MAX_THREADS {
         return Err(format!(
             "{n} threads: at most {MAX_THREADS} (this machine has {} cores)",
@@ -172,14 +233,17 @@ pub fn parse_threads(s: &str) -> std::result::Result<usize, String> {
 /// The default image size.
 pub const DEFAULT_SIZE: (u64, u64) = (1280, 720);
 
+/// `--size`: WIDTHxHEIGHT, both positive whole numbers. The flag takes values that
+/// start with `-`, so a negative size gets this message, not clap's `-- -5` hint.
 fn parse_size(s: &str) -> std::result::Result<(u64, u64), String> {
+    let rule =
+        "the size must be WIDTHxHEIGHT with positive whole numbers of pixels, e.g. 1920x1080";
     let (w, h) = s
         .split_once(['x', 'X'])
-        .ok_or_else(|| format!("\"{s}\" is not WIDTHxHEIGHT, e.g. 1920x1080"))?;
-    let n = |v: &str| {
-        v.trim()
-            .parse::<u64>()
-            .map_err(|_| format!("\"{v}\" is not a whole number of pixels"))
+        .ok_or_else(|| format!("\"{s}\": {rule}"))?;
+    let n = |v: &str| match v.trim().parse::<u64>() {
+        Ok(n) if n > 0 => Ok(n),
+        _ => Err(format!("\"{s}\": {rule} (\"{v}\" is not one)")),
     };
     Ok((n(w)?, n(h)?))
 }
@@ -256,13 +320,15 @@ impl ViewArgs {
         } else {
             // No camera option given: a scene no camera in range can frame is said to
             // be so, with the scene named, not left to "invalid camera".
-            scene.automatic_camera(viewport.aspect()).map_err(|e| match e {
-                Error::InvalidCamera(m) => Error::InvalidCamera(format!(
-                    "{}: {m} (--eye, --target, --near, --far)",
-                    self.scene.as_deref().unwrap_or("demo:default")
-                )),
-                e => e,
-            })?
+            scene
+                .automatic_camera(viewport.aspect())
+                .map_err(|e| match e {
+                    Error::InvalidCamera(m) => Error::InvalidCamera(format!(
+                        "{}: {m} (--eye, --target, --near, --far)",
+                        self.scene.as_deref().unwrap_or("demo:default")
+                    )),
+                    e => e,
+                })?
         };
         let mut cam = Camera {
             eye: self.eye.unwrap_or(base.eye),
@@ -306,7 +372,8 @@ impl ViewArgs {
                 return Err(Error::option(
                     "--near",
                     format!(
-                        "near {n} is not before the far distance {} ({source}): give --far too",
+                        "near {} is not before the far distance {} ({source}): give --far too",
+                        readable(n),
                         readable(cam.far)
                     ),
                 ));
@@ -315,7 +382,8 @@ impl ViewArgs {
                 return Err(Error::option(
                     "--far",
                     format!(
-                        "far {f} is not beyond the near distance {} ({source}): give --near too",
+                        "far {} is not beyond the near distance {} ({source}): give --near too",
+                        readable(f),
                         readable(cam.near)
                     ),
                 ));
@@ -418,12 +486,19 @@ pub fn is_over_budget(e: &Error) -> bool {
     }
 }
 
-/// A distance in a message: plain at ordinary magnitudes, in exponent form beyond.
-fn readable(x: f64) -> String {
-    if x != 0.0 && !(1e-4..1e6).contains(&x.abs()) {
-        format!("{x:e}")
+/// A number in a message: six significant digits at most, plain at ordinary
+/// magnitudes and in exponent form beyond (`1e-300`, not 300 digits). Every message
+/// that echoes a float goes through this.
+pub fn readable(x: f64) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    // Rounded to six significant digits, then printed in its shortest form.
+    let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+    if rounded != 0.0 && !(1e-4..1e6).contains(&rounded.abs()) {
+        format!("{rounded:e}")
     } else {
-        format!("{x}")
+        format!("{rounded}")
     }
 }
 

@@ -139,6 +139,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         first
     });
     check_memory(viewport, algos.len(), available_memory())?;
+    for w in args.tuning.unused_warnings(&algos) {
+        crate::out::errln!("warning: {w}");
+    }
 
     let rows = args.view.with_threads(|| {
         let view = prepare(scene, &camera, viewport, &prep)?;

@@ -85,6 +85,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = &loaded.scene;
     let viewport = args.view.viewport(scene)?;
     let camera = args.view.camera(scene, viewport)?;
+    for w in args.tuning.unused_warnings(&[args.algo]) {
+        crate::out::errln!("warning: {w}");
+    }
     let mut options = args.tuning.options_with_budget(args.view.memory_limit);
     // Slow algorithms on big scenes (brute-force ray casting of a million triangles
     // takes hours) show how far they are, when someone is watching.

@@ -158,7 +158,7 @@ fn absurd_sizes_and_bad_input_get_clear_errors() {
     let dir = tempdir("errors");
     let cases: [(&[&str], &str); 7] = [
         (&["render", "--size", "20000x10"], "at most 16384"),
-        (&["render", "--size", "0x10"], "at least 1 pixel"),
+        (&["render", "--size", "0x10"], "positive whole numbers"),
         (&["render", "--size", "banana"], "WIDTHxHEIGHT"),
         (&["render", "demo:nope"], "unknown demo scene \"nope\""),
         (&["render", "missing.obj"], "missing.obj"),
@@ -695,6 +695,177 @@ fn camera_and_argument_errors_name_what_the_user_gave() {
         let t = text(&o);
         assert_eq!(o.status.code(), Some(2), "{t}");
         assert!(t.contains("SCENE") && t.contains("not valid UTF-8"), "{t}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn every_numeric_flag_answers_bad_values_itself_never_with_clap_hints() {
+    // Negative, zero and garbage values of each numeric flag, in each subcommand that
+    // has it: our parser's message (naming the flag), never clap's "-- -5" hint.
+    let dir = tempdir("numeric-flags");
+    let flags: [(&str, &[&str], &str); 10] = [
+        (
+            "--size",
+            &["-5x5", "5x-5", "0x5", "-1", "ax3", "-"],
+            "positive whole numbers",
+        ),
+        ("--threads", &["-1", "0", "-0", "x", "-1e3"], "threads"),
+        ("--fov", &["-inf", "nan", "-x", "--"], "finite number"),
+        ("--near", &["-inf", "-x"], "finite number"),
+        ("--far", &["-nan", "-.x"], "finite number"),
+        ("--ortho", &["-inf", "-"], "finite number"),
+        (
+            "--octree-depth",
+            &["-3", "-0.5", "11"],
+            "whole number from 0 to",
+        ),
+        ("--eye", &["-1,2", "-x,0,0"], "\""),
+        ("--max-faces", &["-5", "0"], "faces"),
+        ("--budget", &["-1", "-1e-3", "0", "-inf"], "seconds"),
+    ];
+    for (flag, values, says) in flags {
+        let subs: &[&str] = if matches!(flag, "--max-faces" | "--budget") {
+            &["bench"]
+        } else {
+            &["render", "compare", "bench"]
+        };
+        for sub in subs {
+            for value in values {
+                let args = [sub, "demo:cube", flag, value];
+                let o = obscura_within(&args, &dir, 20);
+                let t = text(&o);
+                assert_eq!(o.status.code(), Some(2), "{args:?}: {t}");
+                assert!(!t.contains("tip:") && !t.contains("-- "), "{args:?}: {t}");
+                assert!(t.contains(flag) && t.contains(says), "{args:?}: {t}");
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn conflicting_or_ignored_flags_are_refused_or_warned() {
+    let dir = tempdir("conflicts");
+    // --ortho and --fov choose two projections: refused, in either order.
+    for args in [
+        ["render", "demo:cube", "--ortho", "3", "--fov", "60"],
+        ["render", "demo:cube", "--fov", "60", "--ortho", "3"],
+    ] {
+        let o = obscura(&args, &dir);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {t}");
+        assert!(t.contains("--ortho") && t.contains("--fov"), "{t}");
+    }
+    // Tuning flags of an algorithm that does not run: a warning that names the flag.
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["render", "--algo", "zbuffer", "--octree-depth", "3"],
+            "--octree-depth 3",
+        ),
+        (
+            &["render", "--algo", "bsp", "--bounds", "obb"],
+            "--bounds obb",
+        ),
+        (
+            &[
+                "render",
+                "--algo",
+                "octree",
+                "--bsp-traversal",
+                "back-to-front",
+            ],
+            "--bsp-traversal",
+        ),
+        (
+            &["compare", "--algos", "bsp", "--octree-depth", "3"],
+            "--octree-depth 3",
+        ),
+    ];
+    for (args, flag) in cases {
+        let mut all = args.to_vec();
+        all.extend(["demo:cube", "--size", "8x8", "-o", "x.png"]);
+        let o = obscura(&all, &dir);
+        let t = text(&o);
+        assert!(o.status.success(), "{all:?}: {t}");
+        assert!(
+            t.contains(&format!("warning: {flag}")) && t.contains("no effect"),
+            "{all:?}: {t}"
+        );
+    }
+    // Used, they give no such warning.
+    let o = obscura(
+        &[
+            "render",
+            "demo:cube",
+            "--algo",
+            "octree",
+            "--octree-depth",
+            "3",
+            "--size",
+            "8x8",
+            "-o",
+            "y.png",
+        ],
+        &dir,
+    );
+    assert!(
+        o.status.success() && !text(&o).contains("no effect"),
+        "{}",
+        text(&o)
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn messages_print_extreme_numbers_briefly() {
+    // A float echoed in a message is at most a few significant digits, in exponent
+    // form when far from 1: never hundreds of digits.
+    let dir = tempdir("numbers");
+    let runs: [&[&str]; 3] = [
+        &[
+            "bench",
+            "demo:cube",
+            "--algos",
+            "zbuffer",
+            "--max-faces",
+            "20",
+            "--budget",
+            "1e-300",
+        ],
+        &[
+            "render",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "-o",
+            "a.png",
+            "--near",
+            "1e300",
+        ],
+        &[
+            "render",
+            "demo:cube",
+            "--size",
+            "8x8",
+            "-o",
+            "b.png",
+            "--far",
+            "1e-300",
+        ],
+    ];
+    for args in runs {
+        let t = text(&obscura(args, &dir));
+        let longest = t
+            .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .map(str::len)
+            .max()
+            .unwrap_or(0);
+        assert!(
+            longest <= 20,
+            "{args:?}: a number of {longest} characters in {t}"
+        );
+        assert!(t.contains("e300") || t.contains("e-300"), "{args:?}: {t}");
     }
     std::fs::remove_dir_all(&dir).ok();
 }
