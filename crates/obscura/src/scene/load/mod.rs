@@ -55,10 +55,9 @@ use crate::{Error, Result};
 /// # Example
 /// ```
 /// use obscura::scene::load::LoadOptions;
-/// let options = LoadOptions {
-///     allow_outside_references: true,
-///     ..LoadOptions::default()
-/// };
+/// // The struct is non-exhaustive: start from the default and set fields.
+/// let mut options = LoadOptions::default();
+/// options.allow_outside_references = true;
 /// assert!(options.memory_limit.is_none());
 /// ```
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
