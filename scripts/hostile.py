@@ -114,7 +114,8 @@ def common_checks(cls, case, r, size_bytes=0, names=()):
         if names and not any(n in err for n in names):
             note(cls, "unnamed-error", case, err[:160])
             ok = False
-        for artefact in ("Some(", "None)", "Err(", "Ok(", "{ kind:", "Error {", "\\u{"):
+        # (A control character quoted as `\u{12}` is an escape, not a debug structure.)
+        for artefact in ("Some(", "None)", "Err(", "Ok(", "{ kind:", "Error {"):
             if artefact in err:
                 note(cls, "debug-text", case, err[:160])
                 ok = False
@@ -729,7 +730,7 @@ def class_messages(bin_, root, rng):
         r = run(bin_, ["render", "t.obj", "-o", "o.png"] + args, d)
         n += 1
         case = " ".join(args)
-        common_checks(cls, case, r, names=(args[0], args[0].lstrip("-")))
+        common_checks(cls, case, r, names=(args[0], args[0].lstrip("-"), "field of view"))
         if "-- -" in r.err or "tip:" in r.err and "--" in r.err and args[1].startswith("-"):
             note(cls, "clap-hint", case, r.err.strip().splitlines()[0][:120])
         if len(max(r.err.split(), key=len, default="")) > 60:

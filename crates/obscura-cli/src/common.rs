@@ -62,7 +62,8 @@ pub struct ViewArgs {
     /// fragments, octree nodes, a scene file's placed faces...) is checked against it
     /// and refused with its name rather than exhausting memory. Given, it also replaces
     /// the BSP's default cap of 2 million fragments (a few seconds of building).
-    #[arg(long, value_name = "SIZE", value_parser = obscura::budget::parse_size)]
+    #[arg(long, value_name = "SIZE", value_parser = obscura::budget::parse_size,
+          allow_hyphen_values = true)]
     pub memory_limit: Option<u64>,
 }
 

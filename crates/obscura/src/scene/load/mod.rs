@@ -171,7 +171,14 @@ pub fn load_file_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
 pub fn scene_from(loaded: Loaded, what: &str) -> Result<Scene> {
     let mut scene = Scene::new();
     for o in loaded.objects {
-        scene.add(o)?;
+        // An object of a mesh file is named with the file: its name alone (often the
+        // file's stem) does not say which file to fix.
+        scene.add(o).map_err(|e| match e {
+            Error::InvalidObject { object, message } => {
+                Error::format(what, format!("object \"{object}\""), message)
+            }
+            e => e,
+        })?;
     }
     scene.report_mut().merge(&loaded.report);
     if let Some(up) = loaded.up {
