@@ -187,50 +187,22 @@ impl Error {
 
 impl Error {
     /// A budget error naming another option (the CLI's flag instead of the library's
-    /// field) and, when given, the place in the input; other errors unchanged.
+    /// field); other errors unchanged.
     #[must_use]
-    pub fn with_budget_option(self, flag: &str) -> Self {
-        match self {
-            Error::Budget {
-                structure,
-                count,
-                bytes,
-                limit,
-                at,
-                ..
-            } => Error::Budget {
-                structure,
-                count,
-                bytes,
-                limit,
-                option: flag.to_string(),
-                at,
-            },
-            other => other,
+    pub fn with_budget_option(mut self, flag: &str) -> Self {
+        if let Error::Budget { option, .. } = &mut self {
+            *option = flag.to_string();
         }
+        self
     }
 
     /// A budget error placed in the input (`file:line`); other errors unchanged.
     #[must_use]
-    pub fn budget_at(self, place: String) -> Self {
-        match self {
-            Error::Budget {
-                structure,
-                count,
-                bytes,
-                limit,
-                option,
-                ..
-            } => Error::Budget {
-                structure,
-                count,
-                bytes,
-                limit,
-                option,
-                at: Some(place),
-            },
-            other => other,
+    pub fn budget_at(mut self, place: String) -> Self {
+        if let Error::Budget { at, .. } = &mut self {
+            *at = Some(place);
         }
+        self
     }
 }
 
