@@ -217,25 +217,21 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                     "agree_percent": agree, "stats": stats,
                 }));
             }
-            Err(Failure::Error(e)) => {
+            Err(failure) => {
+                // An error or a skip: a row without figures, and its reason under the
+                // JSON key of its kind.
+                let (kind, e) = match failure {
+                    Failure::Error(e) => ("error", e),
+                    Failure::Skipped(e) => ("skipped", e),
+                };
                 report += &format!(
-                    "{:<18} {:>10} {:>10} {:>9}  error: {e}\n",
+                    "{:<18} {:>10} {:>10} {:>9}  {kind}: {e}\n",
                     row.algorithm.name(),
                     "-",
                     "-",
                     "-"
                 );
-                table.push(json!({ "algorithm": row.algorithm.name(), "error": e }));
-            }
-            Err(Failure::Skipped(e)) => {
-                report += &format!(
-                    "{:<18} {:>10} {:>10} {:>9}  skipped: {e}\n",
-                    row.algorithm.name(),
-                    "-",
-                    "-",
-                    "-"
-                );
-                table.push(json!({ "algorithm": row.algorithm.name(), "skipped": e }));
+                table.push(json!({ "algorithm": row.algorithm.name(), kind: e }));
             }
         }
     }
