@@ -18,6 +18,17 @@ fn tempdir(name: &str) -> PathBuf {
 }
 
 /// The fields of a budget error, or a failure naming what came instead.
+/// The scene seen from its default camera, prepared with the default options.
+fn default_view(scene: &Scene, vp: Viewport) -> obscura::PreparedView<'_> {
+    prepare(
+        scene,
+        &scene.default_camera(vp.aspect()),
+        vp,
+        &PrepareOptions::default(),
+    )
+    .unwrap()
+}
+
 fn budget_fields(r: Result<impl Sized, Error>) -> (String, u64, u64, u64, String, Option<String>) {
     match r {
         Err(Error::Budget {
@@ -38,13 +49,7 @@ fn bsp_on_random_large_triangles_stops_at_the_budget_naming_its_fragments() {
     // 400 triangles as large as the scene: they cut each other everywhere.
     let scene = random_triangles(400, 7, 10.0, 10.0);
     let vp = Viewport::new(80, 60).unwrap();
-    let view = prepare(
-        &scene,
-        &scene.default_camera(vp.aspect()),
-        vp,
-        &PrepareOptions::default(),
-    )
-    .unwrap();
+    let view = default_view(&scene, vp);
     let limit = 2 << 20;
     let options = RenderOptions::default().with_memory_limit(Some(limit));
     let (structure, count, bytes, got_limit, option, _) =
@@ -79,13 +84,7 @@ fn bsp_on_random_large_triangles_stops_at_the_budget_naming_its_fragments() {
 fn octree_depth_10_is_refused_before_building_and_its_estimate_bounds_the_tree() {
     let scene = demo::cube();
     let vp = Viewport::new(32, 24).unwrap();
-    let view = prepare(
-        &scene,
-        &scene.default_camera(vp.aspect()),
-        vp,
-        &PrepareOptions::default(),
-    )
-    .unwrap();
+    let view = default_view(&scene, vp);
     let small = RenderOptions::default()
         .with_octree_depth(10)
         .with_memory_limit(Some(16 << 20));
@@ -131,13 +130,7 @@ fn octree_depth_10_is_refused_before_building_and_its_estimate_bounds_the_tree()
 fn a_frame_larger_than_the_budget_is_refused_before_it_is_allocated() {
     let scene = demo::cube();
     let vp = Viewport::new(16384, 16384).unwrap();
-    let view = prepare(
-        &scene,
-        &scene.default_camera(vp.aspect()),
-        vp,
-        &PrepareOptions::default(),
-    )
-    .unwrap();
+    let view = default_view(&scene, vp);
     let options = RenderOptions::default().with_memory_limit(Some(64 << 20));
     for a in Algorithm::ALL {
         let (structure, count, bytes, _, _, _) = budget_fields(render(a, &view, &options));
