@@ -19,7 +19,7 @@ measure_with() { # pick name field -- args...
   local best=""
   for _ in $(seq "$RUNS"); do
     # stderr shown only on failure (Sponza's one degenerate face warns on every run)
-    "$BIN" render "$@" --size 1920x1080 --threads 1 --stats-json "$tmp/s.json" -o "$tmp/o.png" \
+    "$BIN" render "$@" --size 1920x1080 --threads 1 --time-limit none --stats-json "$tmp/s.json" -o "$tmp/o.png" \
       >/dev/null 2>"$tmp/err" || { cat "$tmp/err" >&2; exit 1; }
     v=$(python3 -c "import json; d=json.load(open('$tmp/s.json')); f='$field'.split('.'); [d:=d[k] for k in f]; print(d)")
     best=$(python3 -c "b='$best'; v=float('$v'); print(v if b=='' else $pick(float(b), v))")

@@ -216,8 +216,19 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     for w in args.tuning.unused_warnings(&algos) {
         errln!("warning: {w}");
     }
-    let options = args.tuning.options_with_budget(args.view.memory_limit);
-    // Per algorithm, the sizes skipped for the memory budget, with the reason.
+    // A bench runs for minutes by design: `--time-limit` bounds each render here, and
+    // so does the bench's own budget.
+    let per_render = std::time::Duration::from_secs_f64(args.budget);
+    let options = args
+        .tuning
+        .options_with_budget(args.view.memory_limit)
+        .with_time_limit(Some(
+            args.view
+                .time_limit
+                .0
+                .map_or(per_render, |l| l.min(per_render)),
+        ));
+    // Per algorithm, the sizes skipped for the memory or time budget, with the reason.
     let mut skipped: Vec<(Algorithm, usize, String)> = Vec::new();
     for &n in &sizes {
         // No scene is built for a size that every algorithm skips.
@@ -247,7 +258,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                 Ok(t) => t,
                 Err(e) if crate::common::is_over_budget(&e) => {
                     let reason = crate::common::cli_error(e).to_string();
-                    errln!("{algorithm} at {n} faces: skipped, over the memory budget: {reason}");
+                    errln!("{algorithm} at {n} faces: skipped: {reason}");
                     points.push((n, f64::NAN));
                     skipped.push((*algorithm, n, reason));
                     continue;

@@ -65,6 +65,71 @@ pub struct ViewArgs {
     #[arg(long, value_name = "SIZE", value_parser = obscura::budget::parse_size,
           allow_hyphen_values = true)]
     pub memory_limit: Option<u64>,
+    /// Time limit of the run: seconds (30, 2.5s, 2m, 1h) or "none" (default: 8 s).
+    /// Work that would pass it by estimate (brute-force and bounding-volume ray
+    /// casting, the painter's algorithms, the octree) is refused before it starts, and
+    /// every loop whose length the input decides stops when it passes, naming the work;
+    /// `compare` skips what does not fit in what is left.
+    #[arg(long, value_name = "SECONDS", default_value = "8", value_parser = parse_time_limit,
+          allow_hyphen_values = true)]
+    pub time_limit: TimeLimit,
+}
+
+/// A run's time limit: `None` for no limit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeLimit(pub Option<std::time::Duration>);
+
+/// When the process started: the time limit counts from here.
+static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+
+/// Marks the start of the run (the first call wins).
+pub fn mark_start() {
+    START.get_or_init(Instant::now);
+}
+
+impl ViewArgs {
+    /// The time left of `--time-limit` since the run started (`None`: no limit).
+    pub fn remaining_time(&self) -> Option<std::time::Duration> {
+        let limit = self.time_limit.0?;
+        let spent = START.get_or_init(Instant::now).elapsed();
+        Some(limit.saturating_sub(spent))
+    }
+}
+
+/// Parses `--time-limit`: a positive number of seconds with an optional unit (s, m,
+/// h), or `none`.
+pub fn parse_time_limit(s: &str) -> std::result::Result<TimeLimit, String> {
+    let t = s.trim();
+    if t.eq_ignore_ascii_case("none") {
+        return Ok(TimeLimit(None));
+    }
+    let (number, unit) = match t
+        .char_indices()
+        .rev()
+        .find(|(_, c)| c.is_ascii_digit() || *c == '.')
+    {
+        Some((i, _)) => t.split_at(i + 1),
+        None => (t, ""),
+    };
+    let scale = match unit.trim() {
+        "" | "s" => 1.0,
+        "m" | "min" => 60.0,
+        "h" => 3600.0,
+        other => {
+            return Err(format!(
+                "unknown unit \"{other}\" (seconds: 30, 2.5s, 2m, 1h, or none)"
+            ));
+        }
+    };
+    let x = parse_number(number)?;
+    let secs = x * scale;
+    if !(secs.is_finite() && secs > 0.0 && secs <= 1e9) {
+        return Err(format!(
+            "{} s: the limit must be a positive number of seconds up to 1e9, or none",
+            readable(secs)
+        ));
+    }
+    Ok(TimeLimit(Some(std::time::Duration::from_secs_f64(secs))))
 }
 
 /// Options that tune particular algorithms.
@@ -473,15 +538,20 @@ pub fn cli_error(e: Error) -> Error {
                 ),
             }
         }
-        other => other.with_budget_option(MEMORY_LIMIT_FLAG),
+        other => other
+            .with_budget_option(MEMORY_LIMIT_FLAG)
+            .with_time_option(TIME_LIMIT_FLAG),
     }
 }
+
+/// The flag that raises a time limit, named in place of the library's `time_limit`.
+pub const TIME_LIMIT_FLAG: &str = "--time-limit";
 
 /// Whether an error is a structure over the memory budget, or the BSP's fragment cap
 /// (`compare` and `bench` skip that algorithm and go on).
 pub fn is_over_budget(e: &Error) -> bool {
     match e {
-        Error::Budget { .. } => true,
+        Error::Budget { .. } | Error::TimeLimit { .. } => true,
         Error::InvalidOption { option, .. } => option == "bsp fragments",
         _ => false,
     }

@@ -43,6 +43,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    common::mark_start();
     let cli = Cli::parse();
     outputs::remove_temporaries_on_signal();
     let result = match cli.command {

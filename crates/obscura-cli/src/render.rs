@@ -88,7 +88,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     for w in args.tuning.unused_warnings(&[args.algo]) {
         crate::out::errln!("warning: {w}");
     }
-    let mut options = args.tuning.options_with_budget(args.view.memory_limit);
+    let mut options = args
+        .tuning
+        .options_with_budget(args.view.memory_limit)
+        .with_time_limit(args.view.remaining_time());
     // Slow algorithms on big scenes (brute-force ray casting of a million triangles
     // takes hours) show how far they are, when someone is watching.
     let bar = std::io::stderr()
@@ -104,7 +107,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let start = Instant::now();
         let view = prepare(scene, &camera, viewport, &prep)?;
         let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
-        let (frame, stats) = render(args.algo, &view, &options)?;
+        let (frame, stats) =
+            render(args.algo, &view, &options).map_err(|e| e.in_input(&loaded.spec))?;
         let render_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok::<_, obscura::Error>((view.stats().clone(), frame, stats, render_ms, prepare_ms))
     })?;

@@ -1122,7 +1122,8 @@ fn an_interrupted_run_leaves_no_temporary_files() {
     for (signal, code) in [("TERM", 143), ("INT", 130)] {
         let dir = tempdir(&format!("signal-{signal}"));
         std::fs::write(dir.join("slow.png"), "earlier output").unwrap();
-        // Brute-force ray casting of a million triangles: minutes of work.
+        // Brute-force ray casting of a million triangles: minutes of work (no time
+        // limit, which would refuse it up front).
         let mut child = Command::new(env!("CARGO_BIN_EXE_obscura"))
             .args([
                 "render",
@@ -1133,6 +1134,8 @@ fn an_interrupted_run_leaves_no_temporary_files() {
                 "400x400",
                 "--threads",
                 "1",
+                "--time-limit",
+                "none",
                 "-o",
                 "slow.png",
                 "--ids",
@@ -1279,4 +1282,113 @@ fn compare_skips_an_algorithm_over_the_memory_budget_and_writes_the_others() {
         ],
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn compare_skips_what_passes_the_time_limit_and_shows_the_rest() {
+    let dir = tempdir("compare-time");
+    // 3,000 triangles at 640x480: brute-force ray casting would test 9.2e8 pairs,
+    // about 1.4 s on the reference machine, over a limit of 1 s.
+    write_random_large_triangles(&dir.join("tris.obj"), 3000);
+    let o = obscura_within(
+        &[
+            "compare",
+            "tris.obj",
+            "--size",
+            "640x480",
+            "--algos",
+            "zbuffer,raycast,raycast-bvh",
+            "--time-limit",
+            "1",
+            "--json",
+            "c.json",
+        ],
+        &dir,
+        60,
+    );
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    let row = t
+        .lines()
+        .find(|l| l.starts_with("raycast "))
+        .unwrap_or_else(|| panic!("no raycast row in {t}"));
+    assert!(
+        row.contains("skipped")
+            && row.contains("ray-triangle tests")
+            && row.contains("--time-limit"),
+        "{row}"
+    );
+    assert!(!row.contains("time_limit"), "{row}");
+    let bvh = t.lines().find(|l| l.starts_with("raycast-bvh ")).unwrap();
+    assert!(!bvh.contains("skipped") && !bvh.contains("error"), "{bvh}");
+    // Rows keep the order asked for, though the cheap ones ran first.
+    let pos = |name: &str| t.find(&format!("\n{name} ")).unwrap();
+    assert!(
+        pos("zbuffer") < pos("raycast") && pos("raycast") < pos("raycast-bvh"),
+        "{t}"
+    );
+    // `render` refuses the same work with the estimate and the flag; `none` lifts it
+    // (not run: seconds), and bad values are refused with the flag named.
+    refused(
+        &dir,
+        &[
+            (
+                &[
+                    "render",
+                    "tris.obj",
+                    "--size",
+                    "640x480",
+                    "--algo",
+                    "raycast",
+                    "--time-limit",
+                    "1",
+                    "-o",
+                    "r.png",
+                ],
+                &[
+                    "tris.obj: raycast",
+                    "ray-triangle tests",
+                    "--time-limit",
+                    "on the reference machine",
+                ],
+            ),
+            (
+                &["render", "demo:cube", "--time-limit", "soon", "-o", "r.png"],
+                &["--time-limit", "number"],
+            ),
+            (
+                &["render", "demo:cube", "--time-limit", "-3", "-o", "r.png"],
+                &["--time-limit", "positive"],
+            ),
+            (
+                &[
+                    "render",
+                    "demo:cube",
+                    "--time-limit",
+                    "5 parsecs",
+                    "-o",
+                    "r.png",
+                ],
+                &["--time-limit", "unit"],
+            ),
+        ],
+    );
+    assert!(!dir.join("r.png").exists());
+    for limit in ["none", "2m", "0.5h", "30s"] {
+        let o = obscura_within(
+            &[
+                "render",
+                "demo:cube",
+                "--size",
+                "32x24",
+                "--time-limit",
+                limit,
+                "-o",
+                "ok.png",
+            ],
+            &dir,
+            30,
+        );
+        assert!(o.status.success(), "{limit}: {}", text(&o));
+    }
 }

@@ -124,6 +124,30 @@ pub enum Error {
         /// Where the input asks for the structure (a file and line), when known.
         at: Option<String>,
     },
+    /// A run would pass, or passed, its time limit (see [`crate::work`]): refused on
+    /// an estimate before it started, or stopped while it ran.
+    #[error("{}{}", at.as_ref().map(|a| format!("{a}: ")).unwrap_or_default(),
+             crate::work::time_limit_message(work, *estimate_s, *limit_s, option))]
+    TimeLimit {
+        /// The work, e.g. `BSP construction` or `raycast: about 3.4e10 ray-triangle
+        /// tests`.
+        work: String,
+        /// The estimate in seconds on the reference machine, when refused up front.
+        estimate_s: Option<f64>,
+        /// The time limit (or, for an estimate, the time that was left) in seconds.
+        limit_s: f64,
+        /// The option that raises the limit: `time_limit` in the library, the flag in
+        /// the CLI.
+        option: String,
+        /// The input the work was for (a file, a scene), when known.
+        at: Option<String>,
+    },
+    /// Another thread raised the run's stop flag (see [`crate::work`]).
+    #[error("{work}: stopped on request")]
+    Stopped {
+        /// What was being done.
+        work: String,
+    },
 }
 
 /// The message of an [`Error::Budget`].
@@ -192,6 +216,33 @@ impl Error {
     pub fn with_budget_option(mut self, flag: &str) -> Self {
         if let Error::Budget { option, .. } = &mut self {
             *option = flag.to_string();
+        }
+        self
+    }
+
+    /// A time-limit error naming another option (the CLI's flag instead of the
+    /// library's field); other errors unchanged.
+    #[must_use]
+    pub fn with_time_option(mut self, flag: &str) -> Self {
+        if let Error::TimeLimit { option, .. } = &mut self {
+            *option = flag.to_string();
+        }
+        self
+    }
+
+    /// A budget, time-limit or BSP fragment-cap error of a render placed in the input
+    /// it rendered (a file or scene name) where it names none yet; other errors
+    /// unchanged.
+    #[must_use]
+    pub fn in_input(mut self, input: &str) -> Self {
+        match &mut self {
+            Error::Budget { at, .. } | Error::TimeLimit { at, .. } if at.is_none() => {
+                *at = Some(input.to_string());
+            }
+            Error::InvalidOption { option, reason } if option == "bsp fragments" => {
+                *reason = format!("{input}: {reason}");
+            }
+            _ => {}
         }
         self
     }

@@ -42,6 +42,7 @@ pub mod raster;
 pub mod scene;
 pub mod surface;
 pub mod view;
+pub mod work;
 
 pub use error::{Error, Result};
 pub use frame::{BACKGROUND, Frame, RgbImage};

@@ -464,6 +464,16 @@ impl BspTree {
     /// Builds the tree of every polygon of every object of the scene. An empty scene
     /// gives an empty tree. Fails only on invalid options.
     pub fn build(scene: &Scene, options: &BspOptions) -> Result<BspTree> {
+        Self::build_until(scene, options, &crate::work::Deadline::default())
+    }
+
+    /// [`BspTree::build`] that stops with the deadline's error (see [`crate::work`])
+    /// when it passes while the tree is built.
+    pub fn build_until(
+        scene: &Scene,
+        options: &BspOptions,
+        deadline: &crate::work::Deadline,
+    ) -> Result<BspTree> {
         options.validate()?;
         let start = Instant::now();
         let mut tree = BspTree {
@@ -549,7 +559,7 @@ impl BspTree {
             }
         }
         let all: Vec<u32> = (0..tree.fragments.len() as u32).collect();
-        tree.build_nodes(all, options)?;
+        tree.build_nodes(all, options, deadline)?;
         tree.compute_subtree_bounds();
         tree.stats.nodes = tree.nodes.len() as u64;
         tree.stats.fragments = tree.node_fragments.len() as u64;
@@ -557,7 +567,12 @@ impl BspTree {
         Ok(tree)
     }
 
-    fn build_nodes(&mut self, all: Vec<u32>, options: &BspOptions) -> Result<()> {
+    fn build_nodes(
+        &mut self,
+        all: Vec<u32>,
+        options: &BspOptions,
+        deadline: &crate::work::Deadline,
+    ) -> Result<()> {
         if all.is_empty() {
             return Ok(());
         }
@@ -581,6 +596,7 @@ impl BspTree {
         let mut stack: Vec<(u32, Vec<u32>, u32)> = vec![(0, all, 1)];
         let mut points = Vec::new();
         while let Some((n, set, depth)) = stack.pop() {
+            deadline.check("BSP construction")?;
             waiting -= set.capacity() as u64 * 4;
             let (plane, eps, splitter) = match self.choose_splitter(&set, options, &mut rng) {
                 Splitter::Polygon(i) => {

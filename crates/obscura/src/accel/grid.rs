@@ -246,6 +246,22 @@ impl UniformGrid {
         options: &GridOptions,
         budget: &crate::budget::MemoryBudget,
     ) -> crate::Result<Self> {
+        Self::build_until(
+            triangles,
+            options,
+            budget,
+            &crate::work::Deadline::default(),
+        )
+    }
+
+    /// [`UniformGrid::build_with_budget`] that also stops with the deadline's error
+    /// (see [`crate::work`]) when it passes during the build.
+    pub fn build_until(
+        triangles: &SceneTriangles,
+        options: &GridOptions,
+        budget: &crate::budget::MemoryBudget,
+        deadline: &crate::work::Deadline,
+    ) -> crate::Result<Self> {
         let start = Instant::now();
         let mut grid = UniformGrid::default();
         let n = triangles.len();
@@ -285,6 +301,8 @@ impl UniformGrid {
         grid.max_tau = grow.min_element() * 0.25;
         let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(n * 2);
         for (t, tri) in triangles.vertices().iter().enumerate() {
+            // Once per triangle: a large one meets millions of cells.
+            deadline.check("ray-casting grid construction")?;
             let lo = tri[0].min(tri[1]).min(tri[2]) - grow;
             let hi = tri[0].max(tri[1]).max(tri[2]) + grow;
             let c0 = grid.cell_of(lo);

@@ -59,7 +59,7 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
     let bsp = options
         .bsp
         .with_memory_limit(options.bsp.memory_limit.or(options.memory_limit));
-    let tree = BspTree::build(view.scene(), &bsp)?;
+    let tree = BspTree::build_until(view.scene(), &bsp, &options.deadline)?;
     render_with_tree(&tree, view, options)
 }
 
@@ -184,6 +184,10 @@ struct Visitor<'a> {
     screen: Vec<ViewVertex>,
     whole: Vec<ViewVertex>,
     cuts: Vec<ScreenCut>,
+    /// The render's deadline (see [`crate::work`]) and the error that stopped the
+    /// traversal.
+    deadline: &'a crate::work::Deadline,
+    stopped: Option<Error>,
 }
 
 impl Visitor<'_> {
@@ -275,6 +279,12 @@ impl BspVisitor for Visitor<'_> {
 
     fn fragment(&mut self, f: u32) -> ControlFlow<()> {
         self.counts.visited += 1;
+        if self.counts.visited.is_multiple_of(256)
+            && let Err(e) = self.deadline.check("BSP traversal")
+        {
+            self.stopped = Some(e);
+            return ControlFlow::Break(());
+        }
         let (tree, data) = (self.tree, self.data);
         let frag = tree.fragment(f);
         let k = frag.object as usize;
@@ -364,8 +374,13 @@ pub fn render_with_tree(
         screen: Vec::new(),
         whole: Vec::new(),
         cuts: Vec::new(),
+        deadline: &options.deadline,
+        stopped: None,
     };
     let done = tree.traverse_with(viewpoint, traversal, &mut v);
+    if let Some(e) = v.stopped {
+        return Err(e);
+    }
     let counts = v.counts;
     let view_ms = start.elapsed().as_secs_f64() * 1e3;
     let total = tree.stats().fragments;

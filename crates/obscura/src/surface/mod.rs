@@ -151,6 +151,17 @@ pub struct RenderOptions {
     /// splits, nodes, grids: see [`crate::budget`]); `None` takes the default, half of
     /// the memory available.
     pub memory_limit: Option<u64>,
+    /// The time limit of the render (see [`crate::work`]): work whose estimate passes
+    /// it is refused before it starts, and the loops whose length the input decides
+    /// stop when it passes, with an [`Error::TimeLimit`]. `None` (the default): no
+    /// limit.
+    pub time_limit: Option<std::time::Duration>,
+    /// A flag another thread can raise to stop the render with an
+    /// [`Error::Stopped`] (checked where the time limit is).
+    pub stop: Option<crate::work::StopFlag>,
+    /// The deadline of the render in progress, made by [`render`] from `time_limit`
+    /// and `stop`.
+    pub(crate) deadline: crate::work::Deadline,
 }
 
 impl Default for RenderOptions {
@@ -162,6 +173,9 @@ impl Default for RenderOptions {
             octree_depth: 7,
             progress: None,
             memory_limit: None,
+            time_limit: None,
+            stop: None,
+            deadline: crate::work::Deadline::default(),
         }
     }
 }
@@ -175,6 +189,8 @@ impl fmt::Debug for RenderOptions {
             .field("octree_depth", &self.octree_depth)
             .field("progress", &self.progress.is_some())
             .field("memory_limit", &self.memory_limit)
+            .field("time_limit", &self.time_limit)
+            .field("stop", &self.stop.is_some())
             .finish()
     }
 }
@@ -219,6 +235,37 @@ impl RenderOptions {
     #[must_use]
     pub fn with_memory_limit(mut self, limit: Option<u64>) -> Self {
         self.memory_limit = limit;
+        self
+    }
+
+    /// These options with a time limit (`None`: no limit; see [`crate::work`]).
+    #[must_use]
+    pub fn with_time_limit(mut self, limit: Option<std::time::Duration>) -> Self {
+        self.time_limit = limit;
+        self
+    }
+
+    /// These options with a stop flag: raising it from another thread stops the
+    /// render with an [`Error::Stopped`].
+    #[must_use]
+    pub fn with_stop(mut self, stop: crate::work::StopFlag) -> Self {
+        self.stop = Some(stop);
+        self
+    }
+
+    /// `Ok` while the render in progress may go on (its time limit not passed, its
+    /// stop flag not raised); else the error that ends it, naming `work`. Always `Ok`
+    /// outside [`render`] unless a deadline was started with
+    /// [`RenderOptions::started`].
+    pub fn check_time(&self, work: &str) -> Result<()> {
+        self.deadline.check(work)
+    }
+
+    /// These options with the deadline of a render starting now (what [`render`]
+    /// does; for callers of an algorithm's own `render`).
+    #[must_use]
+    pub fn started(mut self) -> Self {
+        self.deadline = crate::work::Deadline::new(self.time_limit, self.stop.clone());
         self
     }
 
@@ -294,7 +341,14 @@ pub fn render(
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
     let start = Instant::now();
+    let options = &options.clone().started();
+    options.check_time(algorithm.name())?;
     check_budget(algorithm, view, options)?;
+    if options.time_limit.is_some()
+        && let Some(estimate) = estimate(algorithm, view, options)
+    {
+        options.deadline.admit(&estimate)?;
+    }
     let (frame, mut stats) = match algorithm {
         Algorithm::ZBuffer => zbuffer::render(view, options),
         Algorithm::Scanline => scanline::render(view, options),
@@ -312,6 +366,156 @@ pub fn render(
     }?;
     stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
     Ok((frame, stats))
+}
+
+/// The work of `algorithm` on `view` where it is a product of counts known before it
+/// starts (see [`crate::work`]), `None` where it is not (those algorithms check their
+/// time limit as they run):
+/// - brute-force ray casting tests every ray against every triangle;
+/// - bounding-volume ray casting tests, for each object, the rays through the screen
+///   rectangle of its box against its triangles (the whole image when the box reaches
+///   behind the eye);
+/// - the painter's algorithms (depth sort, its matrix variant, a back-to-front BSP)
+///   paint every polygon whole: the sum of the view polygons' areas in pixels;
+/// - the z-buffer tests at most every pixel of every polygon (only measured when the
+///   bound "every polygon covers the image" passes a second);
+/// - the octree's build meets each triangle in the voxels its area, perimeter and
+///   corners reach at every level (an upper bound, see [`octree::check_budget`]).
+#[must_use]
+pub fn estimate(
+    algorithm: Algorithm,
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+) -> Option<crate::work::Estimate> {
+    use crate::work::{Estimate, NS_PER_PAINTED_PIXEL, NS_PER_RAY_TRIANGLE};
+    let vp = view.viewport();
+    let pixels = vp.pixel_count() as f64;
+    let name = algorithm.name();
+    match algorithm {
+        Algorithm::Raycast => Some(Estimate::new(
+            name,
+            "ray-triangle tests",
+            pixels * view.scene().triangle_count() as f64,
+            NS_PER_RAY_TRIANGLE,
+        )),
+        Algorithm::RaycastBounds => {
+            let tests: f64 = view
+                .scene()
+                .objects()
+                .iter()
+                .map(|o| {
+                    let (starts, _, _) = o.mesh.polygon_arrays();
+                    let triangles: usize =
+                        starts.windows(2).map(|w| (w[1] - w[0]) as usize - 2).sum();
+                    screen_rect_pixels(view, &o.bounds) * triangles as f64
+                })
+                .sum();
+            Some(Estimate::new(
+                name,
+                "ray-triangle tests",
+                tests,
+                NS_PER_RAY_TRIANGLE,
+            ))
+        }
+        Algorithm::DepthSort | Algorithm::DepthSortMatrix => Some(Estimate::new(
+            name,
+            "pixels painted",
+            painted_pixels(view),
+            NS_PER_PAINTED_PIXEL,
+        )),
+        Algorithm::Bsp if options.bsp.traversal == crate::accel::bsp::BspTraversal::BackToFront => {
+            Some(Estimate::new(
+                name,
+                "pixels painted",
+                painted_pixels(view),
+                NS_PER_PAINTED_PIXEL,
+            ))
+        }
+        // The z-buffer tests at most every pixel of every polygon; the sum of their
+        // areas is only measured when the crude bound (every polygon the whole image)
+        // could matter, so that ordinary views pay nothing for it.
+        Algorithm::ZBuffer
+            if view.polygon_count() as f64 * pixels * crate::work::NS_PER_ZBUFFER_PIXEL > 1e9 =>
+        {
+            Some(Estimate::new(
+                name,
+                "pixels tested",
+                painted_pixels(view),
+                crate::work::NS_PER_ZBUFFER_PIXEL,
+            ))
+        }
+        Algorithm::Octree => Some(Estimate::new(
+            name,
+            "triangle-voxel pairs",
+            octree::estimated_pairs(view.scene(), options.octree_depth),
+            crate::work::NS_PER_OCTREE_PAIR,
+        )),
+        _ => None,
+    }
+}
+
+/// The sum of the view polygons' areas in pixels (each clipped to the view volume, so
+/// none is larger than the image).
+fn painted_pixels(view: &PreparedView<'_>) -> f64 {
+    let (starts, indices, _) = view.polygon_arrays();
+    let vertices = view.vertices();
+    starts
+        .windows(2)
+        .map(|w| {
+            let ring = &indices[w[0] as usize..w[1] as usize];
+            let Some(&last) = ring.last() else {
+                return 0.0;
+            };
+            let mut prev = &vertices[last as usize];
+            let mut twice = 0.0;
+            for &i in ring {
+                let v = &vertices[i as usize];
+                twice += prev.x * v.y - v.x * prev.y;
+                prev = v;
+            }
+            0.5 * f64::abs(twice)
+        })
+        .sum()
+}
+
+/// The pixels of the image inside the screen rectangle of a world box (all of them
+/// when a corner is at or behind the eye plane).
+fn screen_rect_pixels(view: &PreparedView<'_>, b: &crate::geom::Aabb) -> f64 {
+    let vp = view.viewport();
+    let (w, h) = (f64::from(vp.width), f64::from(vp.height));
+    let whole = w * h;
+    if b.is_empty() {
+        return 0.0;
+    }
+    let (mut x0, mut y0, mut x1, mut y1) =
+        (f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY);
+    for k in 0..8 {
+        let c = glam::DVec3::new(
+            if k & 1 == 0 { b.min.x } else { b.max.x },
+            if k & 2 == 0 { b.min.y } else { b.max.y },
+            if k & 4 == 0 { b.min.z } else { b.max.z },
+        );
+        let clip = view.transform().world_to_clip(c);
+        if !(clip.w > 0.0) {
+            return whole;
+        }
+        // Normalised device coordinates to pixels (y down).
+        let (x, y) = (
+            (clip.x / clip.w + 1.0) * 0.5 * w,
+            (1.0 - clip.y / clip.w) * 0.5 * h,
+        );
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    let cw = (x1.min(w) - x0.max(0.0)).max(0.0);
+    let ch = (y1.min(h) - y0.max(0.0)).max(0.0);
+    if cw.is_finite() && ch.is_finite() {
+        cw * ch
+    } else {
+        whole
+    }
 }
 
 /// The structure named by the budget error of a frame and its per-pixel buffers.

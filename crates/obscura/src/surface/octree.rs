@@ -76,7 +76,7 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
     check_budget(view.scene(), options)?;
     let mut frame = Frame::new(vp)?;
     let start = Instant::now();
-    let tree = Octree::from_scene(view.scene(), options.octree_depth)?;
+    let tree = Octree::from_scene_until(view.scene(), options.octree_depth, &options.deadline)?;
     let build_ms = start.elapsed().as_secs_f64() * 1e3;
     options.report(0.5);
 
@@ -138,7 +138,7 @@ pub fn check_budget(scene: &crate::Scene, options: &RenderOptions) -> Result<()>
         return Ok(());
     }
     let budget = options.budget();
-    let (bytes, nodes) = estimate(scene, options.octree_depth);
+    let (bytes, nodes, _) = estimate(scene, options.octree_depth);
     budget.check(
         &format!(
             "{BUDGET_STRUCTURE} at octree depth {} (each level less takes about 4 times less)",
@@ -149,10 +149,17 @@ pub fn check_budget(scene: &crate::Scene, options: &RenderOptions) -> Result<()>
     )
 }
 
-/// The estimate of [`check_budget`]: (bytes, nodes).
-fn estimate(scene: &crate::Scene, depth: u32) -> (u64, u64) {
+/// The (triangle, cell) pairs the build of an octree of this depth meets, at most
+/// (see [`check_budget`]): each is a test of the triangle against the cell's box.
+#[must_use]
+pub fn estimated_pairs(scene: &crate::Scene, depth: u32) -> f64 {
+    estimate(scene, depth.min(crate::accel::octree::MAX_DEPTH)).2
+}
+
+/// The estimate of [`check_budget`]: (bytes, nodes, (triangle, cell) pairs).
+fn estimate(scene: &crate::Scene, depth: u32) -> (u64, u64, f64) {
     let Some(region) = crate::accel::octree::Region::enclosing(&scene.bounds()) else {
-        return (0, 0);
+        return (0, 0, 0.0);
     };
     let side = region.side();
     let leaf = side / f64::from(1u32 << depth.min(30));
@@ -191,7 +198,7 @@ fn estimate(scene: &crate::Scene, depth: u32) -> (u64, u64) {
             u64::MAX
         }
     };
-    (clamp(bytes), clamp(nodes))
+    (clamp(bytes), clamp(nodes), pairs)
 }
 
 /// The scene's triangles that may pass through a voxel holding the near-plane point

@@ -138,10 +138,11 @@ pub fn render(
         Acceleration::Grid => {
             // Cells sized for the rounding of this view's rays (see `accel::grid`).
             let origins = PrimaryRays::new(view.camera(), view.viewport()).origin_magnitude();
-            let grid = UniformGrid::build_with_budget(
+            let grid = UniformGrid::build_until(
                 &triangles,
                 &GridOptions::default().with_ray_origins(origins),
                 &options.budget(),
+                &options.deadline,
             )?;
             render_grid(view, &triangles, &grid, options)
         }
@@ -172,7 +173,7 @@ pub fn render_brute_force(
             )
         }
     }
-    let setup = Setup::new(view, triangles, options.fill_rule);
+    let setup = Setup::new(view, triangles, options);
     let start = Instant::now();
     let (frame, counters) = setup.cast(options, |ctx, counters| {
         ctx.ray.dispatch(Run {
@@ -317,7 +318,7 @@ pub fn render_bounds(
             closest
         }
     }
-    let setup = Setup::new(view, triangles, options.fill_rule);
+    let setup = Setup::new(view, triangles, options);
     let build = Instant::now();
     let margin = 1e-9 * setup.scale.max(f64::MIN_POSITIVE);
     let mut points: Vec<DVec3> = Vec::new();
@@ -381,7 +382,7 @@ pub fn render_bvh(
     bvh: &Bvh,
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
-    let setup = Setup::new(view, triangles, options.fill_rule);
+    let setup = Setup::new(view, triangles, options);
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
         let mut stack = PacketStack::default();
@@ -433,7 +434,7 @@ pub fn render_grid(
     grid: &UniformGrid,
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
-    let setup = Setup::new(view, triangles, options.fill_rule);
+    let setup = Setup::new(view, triangles, options);
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
         let mut mailbox = Mailbox::new(triangles);
@@ -499,14 +500,18 @@ struct Setup<'a> {
     front_triangles: u64,
     scale: f64,
     triangle_count: usize,
+    /// The render's deadline (see [`crate::work`]), checked once per tile of rays:
+    /// past it, the remaining tiles are skipped and the render ends with its error.
+    deadline: crate::work::Deadline,
 }
 
 impl<'a> Setup<'a> {
     fn new(
         view: &PreparedView<'_>,
         triangles: &'a SceneTriangles,
-        fill: crate::raster::FillRule,
+        options: &RenderOptions,
     ) -> Self {
+        let fill = options.fill_rule;
         let camera = view.camera();
         let ignored = triangles.ignored_polygons(view.scene(), camera, view.options().backface);
         let front_triangles = triangles
@@ -535,6 +540,7 @@ impl<'a> Setup<'a> {
             front_triangles,
             scale,
             triangle_count: triangles.len(),
+            deadline: options.deadline.clone(),
         }
     }
 
@@ -564,6 +570,9 @@ impl<'a> Setup<'a> {
         let rows = ids.len() / w.max(1);
         let tie = self.rays.tie_rule();
         for x0 in (0..w).step_by(TILE) {
+            if self.deadline.is_over() {
+                return;
+            }
             let x1 = (x0 + TILE).min(w);
             for r in 0..rows {
                 let sy = self.rays.window_y((j0 + r) as f64 + 0.5);
@@ -608,6 +617,9 @@ impl<'a> Setup<'a> {
         let mut rays: Vec<(DVec3, DVec3)> = Vec::with_capacity(PACKET);
         let mut pixels: Vec<usize> = Vec::with_capacity(PACKET);
         for x0 in (0..w).step_by(TILE) {
+            if self.deadline.is_over() {
+                return;
+            }
             let x1 = (x0 + TILE).min(w);
             for r0 in (0..rows).step_by(PACKET_SIDE) {
                 for i0 in (x0..x1).step_by(PACKET_SIDE) {
@@ -681,6 +693,10 @@ impl<'a> Setup<'a> {
             }
             total
         };
+        // Tiles skipped past the deadline leave the frame unfinished: never returned.
+        if self.deadline.is_over() {
+            options.check_time("rays")?;
+        }
         options.report(1.0);
         Ok((frame, counters))
     }

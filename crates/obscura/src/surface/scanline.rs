@@ -324,6 +324,8 @@ fn run(
         if y % 64 == 0 {
             options.report(f64::from(y) / f64::from(vp.height));
         }
+        // Once per row: a row of 400,000 overlapping faces takes milliseconds.
+        options.check_time("scanline rows")?;
         if trace_rows.contains(&y) {
             s.trace = Some(RowTrace {
                 row: y,

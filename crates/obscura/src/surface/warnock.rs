@@ -144,6 +144,7 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
         done: 0,
         total: root.area(),
         faces,
+        stopped: None,
     };
     for f in 0..s.faces.len() {
         let rel = classify_edges(s.faces.edges_of(f), s.faces.faces[f].rect, root);
@@ -154,6 +155,9 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
         }
     }
     s.window(root, 0, 0);
+    if let Some(e) = s.stopped {
+        return Err(e);
+    }
     options.report(1.0);
     let c = &s.counters;
     let mut stats = Stats::default();
@@ -193,11 +197,23 @@ struct Subdivision<'v> {
     options: &'v RenderOptions,
     done: u64,
     total: u64,
+    /// The deadline's error (see [`crate::work`]), once it passed: no window is
+    /// decided after.
+    stopped: Option<crate::Error>,
 }
 
 impl Subdivision<'_> {
     /// Decides window `win`, whose faces are `members[start..]`.
     fn window(&mut self, win: PixelRect, start: usize, depth: u32) {
+        if self.stopped.is_some() {
+            return;
+        }
+        if self.counters.windows.is_multiple_of(16)
+            && let Err(e) = self.options.check_time("Warnock windows")
+        {
+            self.stopped = Some(e);
+            return;
+        }
         let c = &mut self.counters;
         c.windows += 1;
         c.max_depth = c.max_depth.max(depth);

@@ -439,6 +439,10 @@ struct Builder<'a> {
     /// Leaves no triangle meets, with their cells, to be classified.
     unknown: Vec<(u32, Cell)>,
     sat_tests: u64,
+    /// The build's deadline (see [`crate::work`]), and whether it passed: the
+    /// subdivision then stops and the build ends with its error.
+    deadline: &'a crate::work::Deadline,
+    stopped: bool,
 }
 
 impl Builder<'_> {
@@ -455,6 +459,13 @@ impl Builder<'_> {
     }
 
     fn subdivide(&mut self, i: usize, cell: Cell, list: &[u32]) {
+        if self.stopped {
+            return;
+        }
+        if self.nodes.len() % 512 < 8 && self.deadline.is_over() {
+            self.stopped = true;
+            return;
+        }
         if list.is_empty() {
             self.unknown.push((i as u32, cell));
             return;
@@ -516,8 +527,14 @@ impl Builder<'_> {
                 self.nodes.push(Node::new(0, 1, k));
             }
             let lists = self.split(Cell::ROOT, list);
-            let (soup, tmin, tmax, region, depth) =
-                (self.soup, self.tmin, self.tmax, self.region, self.depth);
+            let (soup, tmin, tmax, region, depth, deadline) = (
+                self.soup,
+                self.tmin,
+                self.tmax,
+                self.region,
+                self.depth,
+                self.deadline,
+            );
             let parts: Vec<Builder<'_>> = lists
                 .par_iter()
                 .enumerate()
@@ -531,6 +548,8 @@ impl Builder<'_> {
                         nodes: vec![Node::new(0, 1, k as u8)],
                         unknown: Vec::new(),
                         sat_tests: 0,
+                        deadline,
+                        stopped: false,
                     };
                     part.subdivide(0, Cell::ROOT.child(k as u8), sub);
                     part
@@ -569,6 +588,7 @@ impl Builder<'_> {
         self.unknown
             .extend(part.unknown.iter().map(|&(i, c)| (map(i), c)));
         self.sat_tests += part.sat_tests;
+        self.stopped |= part.stopped;
     }
 
     /// The face of the triangle nearest to the cell's centre (lower face id, then lower
@@ -647,6 +667,17 @@ impl Octree {
     /// Voxelizes triangles into a tree over `region` with voxels at level `depth`
     /// (at most [`super::MAX_DEPTH`]). Triangles outside the region are ignored.
     pub fn build(soup: &TriangleSoup, region: Region, depth: u32) -> Result<Octree> {
+        Self::build_until(soup, region, depth, &crate::work::Deadline::default())
+    }
+
+    /// [`Octree::build`] that stops with the deadline's error (see [`crate::work`])
+    /// when it passes during the subdivision.
+    pub fn build_until(
+        soup: &TriangleSoup,
+        region: Region,
+        depth: u32,
+        deadline: &crate::work::Deadline,
+    ) -> Result<Octree> {
         check_depth(depth)?;
         let start = Instant::now();
         let tmin: Vec<DVec3> = soup
@@ -668,6 +699,8 @@ impl Octree {
             nodes: vec![Node::new(NONE, 0, 0)],
             unknown: Vec::new(),
             sat_tests: 0,
+            deadline,
+            stopped: false,
         };
         let root_box = region.cell_box(Cell::ROOT);
         let list: Vec<u32> = (0..soup.len() as u32)
@@ -675,6 +708,9 @@ impl Octree {
             .collect();
         b.subdivide_root(&list);
         drop(list);
+        if b.stopped {
+            return Err(deadline.error("octree construction"));
+        }
         let subdivide_ms = start.elapsed().as_secs_f64() * 1e3;
         let start = Instant::now();
         let (components, inside_queries) = b.classify();
@@ -706,6 +742,16 @@ impl Octree {
     /// module documentation, [`Octree::frame_origin`]). A scene with no triangle gives
     /// a single Empty leaf over the unit cube.
     pub fn from_scene(scene: &Scene, depth: u32) -> Result<Octree> {
+        Self::from_scene_until(scene, depth, &crate::work::Deadline::default())
+    }
+
+    /// [`Octree::from_scene`] that stops with the deadline's error (see
+    /// [`crate::work`]) when it passes during the build.
+    pub fn from_scene_until(
+        scene: &Scene,
+        depth: u32,
+        deadline: &crate::work::Deadline,
+    ) -> Result<Octree> {
         check_depth(depth)?;
         let start = Instant::now();
         let mut soup = TriangleSoup::from_scene(scene);
@@ -716,7 +762,7 @@ impl Octree {
         }
         let triangles_ms = start.elapsed().as_secs_f64() * 1e3;
         let mut tree = match Region::enclosing(&soup.bounds()) {
-            Some(region) => Octree::build(&soup, region, depth)?,
+            Some(region) => Octree::build_until(&soup, region, depth, deadline)?,
             None => Octree::uniform(Region::new(DVec3::ZERO, 1.0)?, depth, Leaf::Empty)?,
         };
         tree.frame = frame;

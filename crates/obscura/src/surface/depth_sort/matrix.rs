@@ -154,10 +154,16 @@ impl Graph<'_> {
             c.unsorted += 1;
             cands.clear();
         }
+        if self.ws.out_of_time() {
+            cands.clear();
+        }
         for &j in &cands {
             let jk = j as usize;
             if j == i || !self.alive[jk] || self.painted[jk] || !self.linked[jk] {
                 continue;
+            }
+            if c.comparisons.is_multiple_of(1 << 14) && self.ws.out_of_time() {
+                break;
             }
             match self.relation(i, j, c) {
                 Relation::None => {}
@@ -223,6 +229,9 @@ impl Graph<'_> {
     /// Links faces until none is pending (pieces of splits included).
     fn link_all(&mut self, mut pending: Vec<u32>, c: &mut Counters) {
         while let Some(i) = pending.pop() {
+            if self.ws.over_budget.is_some() {
+                return;
+            }
             if self.alive[i as usize] {
                 self.link(i, &mut pending, c);
             }
@@ -289,6 +298,9 @@ pub(super) fn sort(
     let mut scan = 0usize;
     let mut done = 0usize;
     while g.live > 0 {
+        if g.ws.out_of_time() {
+            break;
+        }
         let next = loop {
             match g.ready.pop() {
                 Some(i) => {

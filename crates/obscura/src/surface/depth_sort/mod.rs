@@ -176,6 +176,7 @@ fn run(
 ) -> Result<Stats> {
     let mut ws = WorkSet::from_view(view, options.fill_rule);
     ws.budget = options.budget();
+    ws.deadline = options.deadline.clone();
     let sorted = ws.polys.len();
     let mut c = Counters::default();
     let mut progress = |f: f64| options.report(f);

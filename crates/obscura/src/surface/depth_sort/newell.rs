@@ -178,6 +178,9 @@ pub(super) fn sort(
     let mut painted = 0usize;
     let budget = super::comparison_budget(n);
     while let Some(p) = s.head() {
+        if s.ws.out_of_time() {
+            return;
+        }
         let pk = p as usize;
         if counters.comparisons > budget {
             // Too much work (thousands of long overlapping slivers): the rest is
@@ -219,6 +222,9 @@ pub(super) fn sort(
                 continue;
             }
             counters.comparisons += 1;
+            if counters.comparisons.is_multiple_of(1 << 14) && s.ws.out_of_time() {
+                return;
+            }
             let qq = &s.ws.polys[q as usize];
             // Test 0: Q is entirely nearer than P (strictly, so that equal-depth
             // coplanar faces still meet the tie rule).

@@ -132,6 +132,8 @@ pub(super) struct WorkSet {
     /// Set when a split was refused because the set passed the budget: the render
     /// ends with this error.
     pub over_budget: Option<crate::Error>,
+    /// The deadline of the render (see [`crate::work`]), checked by the sorts.
+    pub deadline: crate::work::Deadline,
 }
 
 impl WorkSet {
@@ -156,6 +158,7 @@ impl WorkSet {
             coverages: Vec::new(),
             budget: crate::budget::MemoryBudget::new(u64::MAX),
             over_budget: None,
+            deadline: crate::work::Deadline::default(),
         };
         let mut screen = Vec::new();
         for (i, poly) in view.polygons().enumerate() {
@@ -402,6 +405,21 @@ impl WorkSet {
             Some(std::cmp::Ordering::Less)
         } else {
             None
+        }
+    }
+
+    /// Whether the sort must stop: an earlier budget error, or the deadline passed
+    /// (then recorded as the error the render ends with).
+    pub fn out_of_time(&mut self) -> bool {
+        if self.over_budget.is_some() {
+            return true;
+        }
+        match self.deadline.check("depth-sort comparisons and painting") {
+            Ok(()) => false,
+            Err(e) => {
+                self.over_budget = Some(e);
+                true
+            }
         }
     }
 
