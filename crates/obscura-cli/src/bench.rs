@@ -218,7 +218,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     // A bench runs for minutes by design: `--time-limit` bounds each render here, and
     // so does the bench's own budget.
-    let per_render = std::time::Duration::from_secs_f64(args.budget);
+    let per_render =
+        std::time::Duration::try_from_secs_f64(args.budget).unwrap_or(std::time::Duration::MAX);
     let options = args
         .tuning
         .options_with_budget(args.view.memory_limit)
