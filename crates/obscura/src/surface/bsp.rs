@@ -48,7 +48,7 @@ use crate::accel::bsp::{BspTraversal, BspTree, BspVisitor, Viewpoint};
 use crate::clip::outcode_homogeneous;
 use crate::cull::frustum::Containment;
 use crate::geom::newell_normal;
-use crate::surface::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
+use crate::surface::image::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{ModelView, PreparedView, ViewTransform, ViewVertex};
 use crate::{Error, Frame, Result};

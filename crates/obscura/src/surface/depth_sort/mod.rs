@@ -92,7 +92,7 @@ mod matrix;
 mod newell;
 mod work;
 
-use crate::surface::paint::{PaintMode, Painter};
+use crate::surface::image::paint::{PaintMode, Painter};
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewVertex};
 use crate::{Frame, Result};
