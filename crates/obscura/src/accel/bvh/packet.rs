@@ -42,7 +42,7 @@
 //! diagonal) is traced ray by ray with [`Bvh::closest_hit_with`].
 //!
 //! # Kernels
-//! The traversal is written once over a lane backend ([`super::packet_lanes`], one lane per ray): portable Rust,
+//! The traversal is written once over a lane backend (`packet_lanes.rs`, one lane per ray): portable Rust,
 //! compiled for the baseline and for AVX2 (vectorized by the compiler), or AVX-512
 //! intrinsics (sixteen rays per register, comparisons giving the ray masks directly),
 //! chosen at run time by CPU detection; [`Kernel`] lets tests and benchmarks force

@@ -158,7 +158,7 @@ impl Default for RayPacket {
 
 impl RayPacket {
     /// Prepares up to [`PACKET`] rays `(origin, direction)` for boxes whose coordinates
-    /// are at most `scale` (the [`Bvh::scale`]). A ray that is not a ray (zero or not
+    /// are at most `scale` (the [`Bvh::scale`](super::Bvh::scale)). A ray that is not a ray (zero or not
     /// finite direction) gets no lane; rays beyond [`PACKET`] are ignored.
     #[must_use]
     pub fn new(rays: &[(DVec3, DVec3)], scale: f64) -> Self {

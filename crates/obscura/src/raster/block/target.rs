@@ -48,10 +48,10 @@ impl<'a> BlockTarget<'a> {
     /// The target with occlusion culling: `farthest` holds, per block of
     /// `2 BLOCK x BLOCK` pixels of the grid from the target's first pixel (row after
     /// row of `stride / (2 BLOCK)` blocks), a key no larger than any key its pixels
-    /// hold. [`draw`] with [`Align::Grid`] skips the blocks whose key is larger than
+    /// hold. [`draw`](super::draw) with [`Align::Grid`](super::Align::Grid) skips the blocks whose key is larger than
     /// every key the polygon has there: the polygon wins none of their pixels, not even
     /// a tie, so the result is the same. The keys only grow while drawing, so a
-    /// value computed before stays valid (only less effective); [`draw`] recomputes
+    /// value computed before stays valid (only less effective); [`draw`](super::draw) recomputes
     /// the value of each whole block it writes to.
     #[must_use]
     pub fn with_farthest(mut self, farthest: &'a mut [f32]) -> Self {
