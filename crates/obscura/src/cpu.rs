@@ -14,9 +14,17 @@
 //! Each list is written once, in the macro that defines the token: the same literals
 //! feed `FEATURES` and the run-time checks, so they cannot drift apart.
 //!
+//! [`Kernel`] names the compiled variants a caller can ask for (the z-buffer's drawing,
+//! the BVH's single-ray and packet traversals): one enum for the crate, whose
+//! [`Kernel::avx512`] and [`Kernel::avx2`] hand out the tokens a request allows on this
+//! processor. Every variant gives the same result bit for bit; they differ in speed.
+//!
 //! [`simd_test_skipped`] is for tests that compare a vector kernel with its portable
 //! twin: it reports the skip and, with `OBSCURA_REQUIRE_SIMD=1` in the environment,
 //! turns it into a failure.
+//!
+//! Source: *The Rust Reference*, "The `target_feature` attribute" (calling such a
+//! function on a processor without the features is undefined behaviour).
 
 /// Defines a token type whose `new` checks every listed feature.
 macro_rules! token {
@@ -77,6 +85,84 @@ impl Avx512 {
     }
 }
 
+/// Which compiled variant of a kernel to run: every variant runs the same operations in
+/// the same order, so they give the same results bit for bit (the tests compare them).
+/// A variant this processor lacks falls back to the best one below it that it has
+/// ([`Kernel::resolve`]); [`Kernel::Auto`] is the best it has.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Kernel {
+    /// The fastest this processor runs ([`Kernel::detect`]).
+    #[default]
+    Auto,
+    /// Baseline instructions of the target (SSE2 on x86-64); always available.
+    Portable,
+    /// The portable code compiled for x86-64 with AVX2 (the compiler vectorizes it).
+    Avx2,
+    /// AVX-512 F, VL, BW and DQ ([`Avx512`]): the hand-written lanes of the
+    /// rasterizer and of the BVH's packets; code without such lanes (single rays) runs
+    /// its AVX2 build.
+    Avx512,
+}
+
+impl Kernel {
+    /// The fastest kernel this processor runs (never [`Kernel::Auto`]).
+    #[must_use]
+    pub fn detect() -> Kernel {
+        if Avx512::is_available() {
+            Kernel::Avx512
+        } else if Avx2::is_available() {
+            Kernel::Avx2
+        } else {
+            Kernel::Portable
+        }
+    }
+
+    /// Whether this processor runs the kernel itself, without falling back.
+    #[must_use]
+    pub fn is_available(self) -> bool {
+        match self {
+            Kernel::Auto | Kernel::Portable => true,
+            Kernel::Avx2 => Avx2::is_available(),
+            Kernel::Avx512 => Avx512::is_available(),
+        }
+    }
+
+    /// The kernel that runs for this request on this processor: the request if the
+    /// processor has it, else the best one below it that it has (never
+    /// [`Kernel::Auto`]).
+    #[must_use]
+    pub fn resolve(self) -> Kernel {
+        match self {
+            Kernel::Auto => Kernel::detect(),
+            Kernel::Avx512 if Avx512::is_available() => Kernel::Avx512,
+            Kernel::Avx512 | Kernel::Avx2 if Avx2::is_available() => Kernel::Avx2,
+            _ => Kernel::Portable,
+        }
+    }
+
+    /// The AVX-512 token, when the request allows AVX-512 ([`Kernel::Auto`],
+    /// [`Kernel::Avx512`]) and this processor has it.
+    #[must_use]
+    #[inline]
+    pub fn avx512(self) -> Option<Avx512> {
+        match self {
+            Kernel::Auto | Kernel::Avx512 => Avx512::new(),
+            Kernel::Portable | Kernel::Avx2 => None,
+        }
+    }
+
+    /// The AVX2 token, when the request allows AVX2 (anything but
+    /// [`Kernel::Portable`]) and this processor has it.
+    #[must_use]
+    #[inline]
+    pub fn avx2(self) -> Option<Avx2> {
+        match self {
+            Kernel::Portable => None,
+            Kernel::Auto | Kernel::Avx2 | Kernel::Avx512 => Avx2::new(),
+        }
+    }
+}
+
 /// The environment variable that turns a skipped SIMD comparison into a failure.
 pub const REQUIRE_SIMD_VAR: &str = "OBSCURA_REQUIRE_SIMD";
 
@@ -100,20 +186,54 @@ pub fn simd_test_skipped(kernel: &str, what: &str) {
 
 #[cfg(test)]
 mod tests {
-    use super::{Avx2, Avx512};
+    use super::{Avx2, Avx512, Kernel};
+
+    #[test]
+    fn a_kernel_falls_back_to_the_best_below_it_that_the_processor_has() {
+        let (avx2, avx512) = (Avx2::is_available(), Avx512::is_available());
+        let below_avx512 = if avx2 { Kernel::Avx2 } else { Kernel::Portable };
+        let best = if avx512 { Kernel::Avx512 } else { below_avx512 };
+        assert_eq!(Kernel::detect(), best);
+        assert_eq!(Kernel::Auto.resolve(), best);
+        assert_eq!(Kernel::Portable.resolve(), Kernel::Portable);
+        assert_eq!(Kernel::Avx2.resolve(), below_avx512);
+        assert_eq!(Kernel::Avx512.resolve(), best);
+        assert_eq!(Kernel::default(), Kernel::Auto);
+        // The tokens each request hands out.
+        for k in [Kernel::Auto, Kernel::Portable, Kernel::Avx2, Kernel::Avx512] {
+            let r = k.resolve();
+            assert_eq!(k.avx512().is_some(), r == Kernel::Avx512, "{k:?}");
+            assert_eq!(k.avx2().is_some(), r != Kernel::Portable, "{k:?}");
+            assert!(r.is_available(), "{k:?} resolves to {r:?}");
+        }
+    }
 
     /// The sources that contain `#[target_feature]`, with their names.
     const SOURCES: &[(&str, &str)] = &[
-        ("raster/block.rs", include_str!("raster/block.rs")),
+        (
+            "raster/block/tests.rs",
+            include_str!("raster/block/tests.rs"),
+        ),
         (
             "surface/zbuffer/fast.rs",
             include_str!("surface/zbuffer/fast.rs"),
         ),
-        ("accel/bvh/lanes.rs", include_str!("accel/bvh/lanes.rs")),
+        (
+            "accel/bvh/packet_lanes.rs",
+            include_str!("accel/bvh/packet_lanes.rs"),
+        ),
         ("accel/bvh/packet.rs", include_str!("accel/bvh/packet.rs")),
+        (
+            "accel/bvh/ray_packet.rs",
+            include_str!("accel/bvh/ray_packet.rs"),
+        ),
         (
             "accel/bvh/traverse.rs",
             include_str!("accel/bvh/traverse.rs"),
+        ),
+        (
+            "surface/image/resolve.rs",
+            include_str!("surface/image/resolve.rs"),
         ),
         ("view/passes.rs", include_str!("view/passes.rs")),
         (

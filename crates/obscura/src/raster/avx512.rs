@@ -15,6 +15,8 @@
 //! - Safety: every `unsafe` block calls AVX-512 intrinsics, justified by the
 //!   [`Avx512`] value, and the masked memory accesses touch only lanes inside the
 //!   slices (stated where they are made).
+//! - Source: Intel, *Intel 64 and IA-32 Architectures Software Developer's Manual*,
+//!   volume 2 (the instructions behind `core::arch::x86_64`'s intrinsics).
 
 use std::arch::x86_64::*;
 

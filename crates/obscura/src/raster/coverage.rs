@@ -21,8 +21,12 @@
 //!
 //! The evaluation is `dx * (py - oy) - dy * (px - ox)` in `f64`, in exactly that
 //! order (no fused multiply-add): fast kernels must use the same expression.
+//!
+//! Source: Pineda, *A parallel algorithm for polygon rasterization* (SIGGRAPH 1988).
 
 use std::cmp::Ordering;
+
+use super::rounding::sample_range;
 
 /// Which samples on an edge count as inside.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -84,6 +88,17 @@ pub struct EdgeFunction {
 }
 
 impl EdgeFunction {
+    /// A placeholder for the unused slots of fixed-size edge arrays (polygon setups,
+    /// the scanline's inline edges): no sample is inside it.
+    pub const UNSET: EdgeFunction = EdgeFunction {
+        ox: 0.0,
+        oy: 0.0,
+        dx: 0.0,
+        dy: 0.0,
+        sign: 0.0,
+        include_zero: false,
+    };
+
     /// The part of the raw value that depends on the row: `dx * (py - oy)`.
     #[inline(always)]
     #[must_use]
@@ -230,7 +245,7 @@ impl PolygonCoverage {
     /// The covered pixels of row `j` as `[x0, x1)`, or `None` if none.
     #[must_use]
     pub fn row_span(&self, j: u32) -> Option<(u32, u32)> {
-        super::row_span(&self.edges, self.rect, j, self.rect.x0, self.rect.x1)
+        edges_row_span(&self.edges, self.rect, j, self.rect.x0, self.rect.x1)
     }
 
     /// Every non-empty row span as `(row, x0, x1)`, top to bottom.
@@ -239,8 +254,84 @@ impl PolygonCoverage {
     }
 }
 
-/// The pixels whose centres lie in `[minx, maxx] x [miny, maxy]`, clipped to the image.
-#[inline]
+/// The pixels of row `j` within columns `[x0, x1)` covered by the convex polygon with
+/// these edges and sample rectangle `r`, as a half-open span, or `None`: the one
+/// implementation behind [`PolygonCoverage::row_span`] (a whole row),
+/// [`PolygonSetup::row_span_within`](super::PolygonSetup::row_span_within) (a row cut to
+/// columns) and the scanline's edges, which are not held in either. Each edge's
+/// test is monotonic along the row (every step of the canonical expression is monotonic
+/// in `px`), so its inside pixels form an interval: a closed-form guess of its end,
+/// corrected by the exact test, finds it.
+#[inline(always)]
+#[must_use]
+pub fn edges_row_span(
+    edges: &[EdgeFunction],
+    r: PixelRect,
+    j: u32,
+    x0: u32,
+    x1: u32,
+) -> Option<(u32, u32)> {
+    if j < r.y0 || j >= r.y1 {
+        return None;
+    }
+    let py = f64::from(j) + 0.5;
+    let (mut lo, mut hi) = (i64::from(r.x0.max(x0)), i64::from(r.x1.min(x1)));
+    if lo >= hi {
+        return None;
+    }
+    for e in edges {
+        let row = e.row_term(py);
+        let slope = -e.sign * e.dy;
+        let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
+        if slope == 0.0 {
+            if !inside(lo) {
+                return None;
+            }
+            continue;
+        }
+        // Where the edge crosses the row; only a guess, the loops below make it exact.
+        let cross = e.ox + row / e.dy;
+        let guess = if cross.is_finite() {
+            (cross - 0.5).ceil()
+        } else {
+            lo as f64
+        };
+        let g = guess.clamp(lo as f64 - 1.0, hi as f64 + 1.0) as i64;
+        if slope > 0.0 {
+            let mut i = g.clamp(lo, hi);
+            if i < hi && inside(i) {
+                while i > lo && inside(i - 1) {
+                    i -= 1;
+                }
+            } else {
+                while i < hi && !inside(i) {
+                    i += 1;
+                }
+            }
+            lo = i;
+        } else {
+            let mut i = g.clamp(lo - 1, hi - 1);
+            if i >= lo && inside(i) {
+                while i + 1 < hi && inside(i + 1) {
+                    i += 1;
+                }
+            } else {
+                while i >= lo && !inside(i) {
+                    i -= 1;
+                }
+            }
+            hi = i + 1;
+        }
+        if lo >= hi {
+            return None;
+        }
+    }
+    Some((lo as u32, hi as u32))
+}
+
+/// The pixels whose centres lie in `[minx, maxx] x [miny, maxy]`, clipped to the image
+/// (`None` when none does, or a bound is not finite).
+#[inline(always)]
 #[must_use]
 pub fn sample_rect(
     minx: f64,
@@ -253,14 +344,9 @@ pub fn sample_rect(
     if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
         return None;
     }
-    let lo = |v: f64, n: u32| (v - 0.5).ceil().clamp(0.0, f64::from(n)) as u32;
-    let hi = |v: f64, n: u32| ((v - 0.5).floor() + 1.0).clamp(0.0, f64::from(n)) as u32;
-    let r = PixelRect {
-        x0: lo(minx, width),
-        y0: lo(miny, height),
-        x1: hi(maxx, width),
-        y1: hi(maxy, height),
-    };
+    let (x0, x1) = sample_range(minx, maxx, width);
+    let (y0, y1) = sample_range(miny, maxy, height);
+    let r = PixelRect { x0, y0, x1, y1 };
     (!r.is_empty()).then_some(r)
 }
 

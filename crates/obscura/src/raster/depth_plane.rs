@@ -6,6 +6,9 @@
 //! reciprocal, so the view pipeline gives each vertex a *depth key* `zq` (near/depth
 //! for perspective, a linear map of depth for orthographic; larger is nearer) and this
 //! plane interpolates that key.
+//!
+//! Source: Blinn, *Hyperbolic interpolation* (IEEE CG&A, July 1992): `1 / depth` is
+//! affine in screen space.
 
 /// `zq(px, py) = z0 + dzdx (px - x0) + dzdy (py - y0)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,18 +48,29 @@ impl DepthPlane {
         if !(det != 0.0 && det.is_finite()) {
             return None;
         }
-        let (a, b) = (points[k], points[k + 1]);
+        Some(DepthPlane::through(p0, points[k], points[k + 1], det))
+    }
+
+    /// The plane through the points `p0`, `a`, `b`, given `det`, the determinant
+    /// `(a - p0) x (b - p0)` of their `(x, y)` (non-zero and finite): the one
+    /// expression of [`DepthPlane::from_points`] and of the triangle setups.
+    #[inline(always)]
+    #[must_use]
+    pub(crate) fn through(
+        p0: (f64, f64, f64),
+        a: (f64, f64, f64),
+        b: (f64, f64, f64),
+        det: f64,
+    ) -> DepthPlane {
         let (ax, ay, az) = (a.0 - p0.0, a.1 - p0.1, a.2 - p0.2);
         let (bx, by, bz) = (b.0 - p0.0, b.1 - p0.1, b.2 - p0.2);
-        let dzdx = (az * by - bz * ay) / det;
-        let dzdy = (ax * bz - bx * az) / det;
-        Some(DepthPlane {
+        DepthPlane {
             x0: p0.0,
             y0: p0.1,
             z0: p0.2,
-            dzdx,
-            dzdy,
-        })
+            dzdx: (az * by - bz * ay) / det,
+            dzdy: (ax * bz - bx * az) / det,
+        }
     }
 
     /// The key at `(px, py)`.

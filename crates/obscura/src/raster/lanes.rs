@@ -7,6 +7,11 @@
 //! A lane vector holds eight `f64` (one row of an 8x8 block of pixels, or the eight
 //! edges of a polygon); a mask is a `u8`, bit `l` for lane `l`.
 //!
+//! This is one of the crate's two lane abstractions, each for its own kind of lane:
+//! here pixels and edges of the rasterizer; the BVH's packet traversal has its own
+//! (`accel::bvh::packet_lanes`, one lane per ray, `f32` boxes and ray masks). Both
+//! take their AVX-512 proof from the one token, [`crate::cpu::Avx512`].
+//!
 //! # The depth buffer
 //! The rasterizer draws into rows of depth *keys* (`f32`, larger is nearer, `0` where
 //! nothing was drawn) and *encoded ids* (`!face`, `0` where nothing was drawn), so that

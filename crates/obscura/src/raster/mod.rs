@@ -5,6 +5,10 @@
 //! All algorithms that turn polygons into pixels (z-buffer, scanline, depth sort, BSP,
 //! Warnock) use these, so they agree on coverage to the last pixel: that is what lets
 //! the test suite demand identical id images.
+//!
+//! Sources: Pineda, *A parallel algorithm for polygon rasterization* (SIGGRAPH 1988).
+//! Catmull, *A subdivision algorithm for computer display of curved surfaces* (PhD
+//! thesis, University of Utah, 1974): the depth buffer the block rasterizer fills.
 
 #[cfg(target_arch = "x86_64")]
 pub mod avx512;
@@ -12,9 +16,12 @@ pub mod block;
 mod coverage;
 mod depth_plane;
 pub mod lanes;
+mod rounding;
 mod setup;
 
-pub use coverage::{EdgeFunction, FillRule, PixelRect, PolygonCoverage, sample_rect};
+pub use coverage::{
+    EdgeFunction, FillRule, PixelRect, PolygonCoverage, edges_row_span, sample_rect,
+};
 pub use depth_plane::DepthPlane;
-pub use setup::{PolygonSetup, TriangleSetup, row_span};
-pub(crate) use setup::{round_down, round_up, sample_range};
+pub(crate) use rounding::{round_down, round_up, sample_range};
+pub use setup::{PolygonSetup, TriangleSetup};

@@ -7,7 +7,7 @@
 //! - Output: exactly the [`EdgeFunction`]s and [`PixelRect`] of
 //!   [`PolygonCoverage::new`](super::PolygonCoverage::new) and the plane of
 //!   [`DepthPlane::from_points`]; per row, the covered pixels as a span
-//!   ([`PolygonSetup::row_span`]) or a bit mask ([`PolygonSetup::row_mask`]). Both equal
+//!   ([`PolygonSetup::row_span_within`]) or a bit mask ([`PolygonSetup::row_mask`]). Both equal
 //!   the pixels for which [`PolygonCoverage::covers`](super::PolygonCoverage::covers) is
 //!   true: they evaluate the same canonical edge expression, per pixel.
 //! - Complexity: O(n) setup for n vertices; O(n) per row span (a closed-form guess and
@@ -18,17 +18,8 @@
 //! "triangle setup" as in Pineda, *A parallel algorithm for polygon rasterization*
 //! (SIGGRAPH 1988): edge functions set up once per polygon, then evaluated per pixel.
 
-use super::coverage::sample_rect;
+use super::coverage::{edges_row_span, fan_area2, sample_rect};
 use super::{DepthPlane, EdgeFunction, FillRule, PixelRect};
-
-const NO_EDGE: EdgeFunction = EdgeFunction {
-    ox: 0.0,
-    oy: 0.0,
-    dx: 0.0,
-    dy: 0.0,
-    sign: 0.0,
-    include_zero: false,
-};
 
 /// A convex polygon of at most `N` vertices set up for rasterization, in fixed-size
 /// arrays: `PolygonSetup<3>` for triangles (the compiler then unrolls every loop),
@@ -44,7 +35,7 @@ const NO_EDGE: EdgeFunction = EdgeFunction {
 /// let cov = PolygonCoverage::new(&[(1.0, 1.0), (9.0, 2.0), (3.0, 7.0)], FillRule::TopLeft, 16, 16).unwrap();
 /// assert_eq!(setup.rect(), cov.rect());
 /// for j in 0..16 {
-///     assert_eq!(setup.row_span(j, 0, 16), cov.row_span(j));
+///     assert_eq!(setup.row_span_within(j, 0, 16), cov.row_span(j));
 /// }
 /// ```
 #[derive(Clone, Copy, Debug)]
@@ -60,7 +51,7 @@ impl<const N: usize> Default for PolygonSetup<N> {
     fn default() -> Self {
         PolygonSetup {
             points: [(0.0, 0.0, 0.0); N],
-            edges: [NO_EDGE; N],
+            edges: [EdgeFunction::UNSET; N],
             point_count: 0,
             edge_count: 0,
             rect: None,
@@ -119,7 +110,7 @@ impl<const N: usize> PolygonSetup<N> {
         let Some(rect) = sample_rect(minx, miny, maxx, maxy, width, height) else {
             return false;
         };
-        let Some(area2) = super::coverage::fan_area2(n, |k| (points[k].0, points[k].1)) else {
+        let Some(area2) = fan_area2(n, |k| (points[k].0, points[k].1)) else {
             return false;
         };
         let area_sign = area2.signum();
@@ -179,11 +170,11 @@ impl<const N: usize> PolygonSetup<N> {
     }
 
     /// The covered pixels of row `j` within columns `[x0, x1)`, as a half-open span,
-    /// or `None` (see [`row_span`]).
+    /// or `None` (see [`edges_row_span`], which it calls).
     #[inline(always)]
     #[must_use]
-    pub fn row_span(&self, j: u32, x0: u32, x1: u32) -> Option<(u32, u32)> {
-        row_span(self.edges(), self.rect?, j, x0, x1)
+    pub fn row_span_within(&self, j: u32, x0: u32, x1: u32) -> Option<(u32, u32)> {
+        edges_row_span(self.edges(), self.rect?, j, x0, x1)
     }
 
     /// The covered pixels of row `j` among the `count <= 64` columns from `x0`, as bit
@@ -221,78 +212,6 @@ impl<const N: usize> PolygonSetup<N> {
     }
 }
 
-/// The pixels of row `j` within columns `[x0, x1)` covered by the convex polygon with
-/// these edges and sample rectangle `r`, as a half-open span, or `None`. Each edge's
-/// test is monotonic along the row (every step of the canonical expression is monotonic
-/// in `px`), so its inside pixels form an interval: a closed-form guess of its end,
-/// corrected by the exact test, finds it.
-#[inline(always)]
-#[must_use]
-pub fn row_span(
-    edges: &[EdgeFunction],
-    r: PixelRect,
-    j: u32,
-    x0: u32,
-    x1: u32,
-) -> Option<(u32, u32)> {
-    if j < r.y0 || j >= r.y1 {
-        return None;
-    }
-    let py = f64::from(j) + 0.5;
-    let (mut lo, mut hi) = (i64::from(r.x0.max(x0)), i64::from(r.x1.min(x1)));
-    if lo >= hi {
-        return None;
-    }
-    for e in edges {
-        let row = e.row_term(py);
-        let slope = -e.sign * e.dy;
-        let inside = |i: i64| e.inside_row(i as f64 + 0.5, row);
-        if slope == 0.0 {
-            if !inside(lo) {
-                return None;
-            }
-            continue;
-        }
-        // Where the edge crosses the row; only a guess, the loops below make it exact.
-        let cross = e.ox + row / e.dy;
-        let guess = if cross.is_finite() {
-            (cross - 0.5).ceil()
-        } else {
-            lo as f64
-        };
-        let g = guess.clamp(lo as f64 - 1.0, hi as f64 + 1.0) as i64;
-        if slope > 0.0 {
-            let mut i = g.clamp(lo, hi);
-            if i < hi && inside(i) {
-                while i > lo && inside(i - 1) {
-                    i -= 1;
-                }
-            } else {
-                while i < hi && !inside(i) {
-                    i += 1;
-                }
-            }
-            lo = i;
-        } else {
-            let mut i = g.clamp(lo - 1, hi - 1);
-            if i >= lo && inside(i) {
-                while i + 1 < hi && inside(i + 1) {
-                    i += 1;
-                }
-            } else {
-                while i >= lo && !inside(i) {
-                    i -= 1;
-                }
-            }
-            hi = i + 1;
-        }
-        if lo >= hi {
-            return None;
-        }
-    }
-    Some((lo as u32, hi as u32))
-}
-
 /// A set-up triangle: what [`PolygonSetup<3>`] holds, computed without loops over
 /// vertices or branches on the edge orientation (triangles are most polygons of most
 /// scenes, and their setup is most of the work of drawing small ones).
@@ -325,57 +244,10 @@ fn triangle_edge(p: (f64, f64), q: (f64, f64), area_sign: f64, inclusive: bool) 
     }
 }
 
-/// Above this every `f64` is an integer.
-const ALL_INTEGERS: f64 = 4_503_599_627_370_496.0;
-/// Below this (in magnitude) adding and subtracting [`ROUND_TO_INTEGER`] rounds to the
-/// nearest integer.
-const ROUNDS_EXACTLY: f64 = 2_251_799_813_685_248.0;
-/// `1.5 * 2^52`: a sum with it has no fraction bits left.
-const ROUND_TO_INTEGER: f64 = 6_755_399_441_055_744.0;
-
-/// `v` rounded to an integer, the nearest one for `|v| < 2^51` (no C library call
-/// on targets without a rounding instruction); else by truncation, or `v` itself
-/// from `2^52` on (every such `f64` is an integer) and for NaN.
-#[inline(always)]
-fn round_near(v: f64) -> f64 {
-    if v.abs() < ROUNDS_EXACTLY {
-        (v + ROUND_TO_INTEGER) - ROUND_TO_INTEGER
-    } else if v.abs() < ALL_INTEGERS {
-        v as i64 as f64
-    } else {
-        v
-    }
-}
-
-/// `v.ceil()` without a C library call; NaN stays NaN.
-#[inline(always)]
-pub(crate) fn round_up(v: f64) -> f64 {
-    let t = round_near(v);
-    if t < v { t + 1.0 } else { t }
-}
-
-/// `v.floor()` without a C library call; NaN stays NaN.
-#[inline(always)]
-pub(crate) fn round_down(v: f64) -> f64 {
-    let t = round_near(v);
-    if t > v { t - 1.0 } else { t }
-}
-
-/// [`sample_rect`](super::sample_rect)'s pixel range of `[lo, hi]` on an axis of `n` pixels, with its
-/// rounding done by truncation (no C library call where the target has no rounding
-/// instruction): `ceil(lo - 0.5)` to `floor(hi - 0.5) + 1`, clamped to `0..=n`.
-#[inline(always)]
-pub(crate) fn sample_range(lo: f64, hi: f64, n: u32) -> (u32, u32) {
-    let n = f64::from(n);
-    let a = round_up(lo - 0.5).max(0.0).min(n);
-    let b = (round_down(hi - 0.5) + 1.0).max(0.0).min(n);
-    (a as u32, b as u32)
-}
-
 /// The sample rectangle of the triangle `p` in a `width x height` image and twice its
 /// signed area (the area of [`PolygonCoverage::new`](super::PolygonCoverage::new) and
-/// the determinant of [`DepthPlane::from_points`], the same expression for a
-/// triangle); `None` when no sample is in its box or the area is zero or not finite.
+/// the determinant [`DepthPlane::from_points`] picks for a triangle, both by
+/// `coverage::fan_area2`); `None` when no sample is in its box or the area is zero or not finite.
 /// The triangle setups of the rasterizers share it.
 #[inline(always)]
 pub(crate) fn triangle_rect_and_area(
@@ -388,17 +260,8 @@ pub(crate) fn triangle_rect_and_area(
     let maxx = a.0.max(b.0).max(c.0);
     let miny = a.1.min(b.1).min(c.1);
     let maxy = a.1.max(b.1).max(c.1);
-    // sample_rect, for the finite values that pass its check.
-    if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
-        return None;
-    }
-    let (x0, x1) = sample_range(minx, maxx, width);
-    let (y0, y1) = sample_range(miny, maxy, height);
-    let rect = PixelRect { x0, y0, x1, y1 };
-    if rect.is_empty() {
-        return None;
-    }
-    let area2 = super::coverage::fan_area2(3, |k| (p[k].0, p[k].1))?;
+    let rect = sample_rect(minx, miny, maxx, maxy, width, height)?;
+    let area2 = fan_area2(3, |k| (p[k].0, p[k].1))?;
     Some((rect, area2))
 }
 
@@ -413,8 +276,6 @@ impl TriangleSetup {
     pub fn new(p: [(f64, f64, f64); 3], fill: FillRule, width: u32, height: u32) -> Option<Self> {
         let (rect, area2) = triangle_rect_and_area(p, width, height)?;
         let [a, b, c] = p;
-        let (ax, ay, az) = (b.0 - a.0, b.1 - a.1, b.2 - a.2);
-        let (bx, by, bz) = (c.0 - a.0, c.1 - a.1, c.2 - a.2);
         let area_sign = area2.signum();
         let inclusive = fill == FillRule::Inclusive;
         let edges = [
@@ -422,13 +283,7 @@ impl TriangleSetup {
             triangle_edge((b.0, b.1), (c.0, c.1), area_sign, inclusive),
             triangle_edge((c.0, c.1), (a.0, a.1), area_sign, inclusive),
         ];
-        let plane = DepthPlane {
-            x0: a.0,
-            y0: a.1,
-            z0: a.2,
-            dzdx: (az * by - bz * ay) / area2,
-            dzdy: (ax * bz - bx * az) / area2,
-        };
+        let plane = DepthPlane::through(a, b, c, area2);
         Some(TriangleSetup { edges, rect, plane })
     }
 }
@@ -436,42 +291,6 @@ impl TriangleSetup {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn rounding_by_truncation_matches_the_library() {
-        for v in [
-            0.0,
-            -0.0,
-            0.5,
-            -0.5,
-            1.0,
-            -1.0,
-            2.5,
-            -2.5,
-            1e-300,
-            -1e-300,
-            7.999_999_999,
-            -7.999_999_999,
-            1e15 + 0.5,
-            -1e15 - 0.5,
-            2_251_799_813_685_247.5,
-            -2_251_799_813_685_247.5,
-            3e15 + 0.5,
-            -3e15 - 0.5,
-            4_503_599_627_370_495.5,
-            1e20,
-            -1e20,
-            0.49999999999999994,
-            -0.49999999999999994,
-            1.5,
-            -1.5,
-            1e300,
-        ] {
-            assert_eq!(round_up(v), v.ceil(), "{v}");
-            assert_eq!(round_down(v), v.floor(), "{v}");
-        }
-        assert!(round_up(f64::NAN).is_nan() && round_down(f64::INFINITY).is_infinite());
-    }
 
     use crate::raster::PolygonCoverage;
     use crate::scene::demo::SplitMix64;
@@ -532,7 +351,7 @@ mod tests {
                 }
             }
             let Some(cov) = cov else {
-                assert!(setup.rect().is_empty() && setup.row_span(0, 0, w).is_none());
+                assert!(setup.rect().is_empty() && setup.row_span_within(0, 0, w).is_none());
                 continue;
             };
             checked += 1;
@@ -541,14 +360,18 @@ mod tests {
             assert_eq!(setup.depth_plane(), DepthPlane::from_points(&pts));
             assert!(setup.depth_plane().is_some());
             for j in 0..h {
-                assert_eq!(setup.row_span(j, 0, w), cov.row_span(j), "{pts:?} row {j}");
+                assert_eq!(
+                    setup.row_span_within(j, 0, w),
+                    cov.row_span(j),
+                    "{pts:?} row {j}"
+                );
                 // A window that cuts the row, as a tile would.
                 let (a, b) = (7, 23);
                 let expect = cov
                     .row_span(j)
                     .map(|(x0, x1)| (x0.max(a), x1.min(b)))
                     .filter(|(x0, x1)| x0 < x1);
-                assert_eq!(setup.row_span(j, a, b), expect);
+                assert_eq!(setup.row_span_within(j, a, b), expect);
                 let mut mask = 0u64;
                 for i in 0..w {
                     mask |= u64::from(cov.covers(i, j)) << i;

@@ -18,7 +18,7 @@
 //!   outside the view volume, so this changes nothing but time).
 //! - A fragment that is a piece of a split polygon is painted as the pixels of the
 //!   whole polygon on its sides of the node planes that cut it
-//!   ([`BspTree::fragment_cuts`]; the painter in `surface::paint`): the pieces of a polygon
+//!   ([`BspTree::fragment_cuts`]; the painter in `surface::image::paint`): the pieces of a polygon
 //!   then cover each of its pixels exactly once. Painted by their own vertices, a
 //!   piece cut again left a crack along the edge its sibling kept whole.
 //! - Traversal ([`BspOptions::traversal`](crate::accel::bsp::BspOptions)):
@@ -48,7 +48,7 @@ use crate::accel::bsp::{BspTraversal, BspTree, BspVisitor, Viewpoint};
 use crate::clip::outcode_homogeneous;
 use crate::cull::frustum::Containment;
 use crate::geom::newell_normal;
-use crate::surface::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
+use crate::surface::image::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{ModelView, PreparedView, ViewTransform, ViewVertex};
 use crate::{Error, Frame, Result};

@@ -18,8 +18,8 @@
 
 pub mod bsp;
 pub mod depth_sort;
+mod image;
 pub mod octree;
-mod paint;
 pub mod raycast;
 pub mod scanline;
 pub mod warnock;

@@ -8,6 +8,12 @@
 //! nearest one is drawn up to the next crossing. When the list brings nothing new the
 //! order stays the same and the nearest face need not be sought again (coherence).
 //!
+//! Papers: Wylie, Romney, Evans and Erdahl, *Half-tone perspective drawings by
+//! computer* (AFIPS Fall Joint Computer Conference, 1967); Watkins, *A real time
+//! visible surface algorithm* (PhD thesis, University of Utah, 1970); Sutherland,
+//! Sproull and Schumacker, *A characterization of ten hidden-surface algorithms* (ACM
+//! Computing Surveys, 1974).
+//!
 //! # How it runs here
 //! - Edge table: every non-horizontal edge of every prepared polygon, bucketed by the
 //!   first row whose sample line (`y = j + 0.5`) it meets, filled as the scan goes
@@ -77,21 +83,20 @@
 mod coherence;
 mod edge_table;
 mod faces;
-pub(crate) mod screen_faces;
 
 use std::ops::Range;
 
 use crate::Result;
 use crate::frame::Frame;
 use crate::raster::DepthPlane;
-use crate::raster::row_span;
+use crate::raster::edges_row_span;
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewTransform};
 
+use crate::surface::image::screen_faces::{hides, hides_over_overlap, stored_key, surely_nearer};
 use coherence::{Coherence, Order};
 use edge_table::{EdgeTable, ScanEdge, TableEdge, exact_pixel, tolerance};
 use faces::{DEAD, Faces, NONE, slot_hash};
-use screen_faces::{hides, hides_over_overlap, stored_key, surely_nearer};
 
 /// Renders a prepared view with the scanline algorithm.
 pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
@@ -393,7 +398,7 @@ fn fill_keys(frame: &mut Frame, y: u32, x0: u32, x1: u32, plane: &DepthPlane, fa
 /// [`crate::frame::BACKGROUND`]). It is the z-buffer's own resolve (in lanes), so the
 /// two give the same depth for the same key.
 fn keys_to_depths(frame: &mut Frame, t: &ViewTransform) {
-    crate::surface::zbuffer::resolve_frame(frame, t);
+    crate::surface::image::resolve::resolve_frame(frame, t);
 }
 
 impl Scanner<'_> {
@@ -593,7 +598,7 @@ impl Scanner<'_> {
                 self.counters.fallbacks += 1;
                 let rect = faces.info[slot as usize].rect;
                 let edges = faces.edges.of(slot);
-                (lo, hi) = row_span(edges, rect, y, 0, self.width).unwrap_or((lo, lo));
+                (lo, hi) = edges_row_span(edges, rect, y, 0, self.width).unwrap_or((lo, lo));
                 if lo >= hi {
                     continue;
                 }

@@ -2,7 +2,8 @@
 //! it allow, else cut it in four.
 //!
 //! Source: seed 003, "Subdivizarea ariilor elementare" (J. E. Warnock, *A hidden
-//! surface algorithm for computer generated halftone pictures*, 1969). A window (the
+//! surface algorithm for computer generated halftone pictures*, University of Utah
+//! technical report, 1969). A window (the
 //! seed's *arie elementară*) and a face are in one of four relations ([`Relation`]):
 //! the face surrounds the window, lies inside it, is disjoint from it, or intersects
 //! it. The seed's five rules, tried in order:
@@ -46,7 +47,7 @@
 use crate::Result;
 use crate::frame::Frame;
 use crate::raster::{EdgeFunction, PixelRect, PolygonCoverage};
-use crate::surface::scanline::screen_faces::{
+use crate::surface::image::screen_faces::{
     ScreenFaces, corner_samples, fill_run, hides, intersect, set_pixel, stored_key, surely_nearer,
 };
 use crate::surface::{RenderOptions, Stats};

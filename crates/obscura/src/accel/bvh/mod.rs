@@ -36,8 +36,9 @@
 //!   triangles.
 
 mod build;
-mod lanes;
 pub mod packet;
+mod packet_lanes;
+mod ray_packet;
 pub mod traverse;
 
 use std::time::Instant;

@@ -1,5 +1,8 @@
 //! Closest-hit traversal of a [`Bvh`].
 //!
+//! Source: Kay and Kajiya, *Ray tracing complex scenes* (SIGGRAPH 1986), the slab test;
+//! Ize, *Robust BVH ray traversal* (JCGT, 2013), its rounding.
+//!
 //! # Box test in single precision, made conservative
 //! The nodes' boxes are `f32`, rounded outwards from the `f64` triangles. The ray is
 //! converted to `f32` too, and a slab distance `(plane - origin) / direction` carries
@@ -221,20 +224,10 @@ impl BoxRay {
     }
 }
 
-/// Which compiled version of the traversal runs (see the module doc).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Kernel {
-    /// The fastest the CPU supports.
-    #[default]
-    Auto,
-    /// The baseline build (no AVX2), on every CPU.
-    Portable,
-    /// The portable code compiled for AVX2 (where the CPU has it, else portable).
-    Avx2,
-    /// AVX-512 lanes for packets ([`super::packet`]; where the CPU has them, else the
-    /// next best); single rays use the AVX2 build.
-    Avx512,
-}
+/// Which compiled version of the traversal runs (see the module doc): the crate's one
+/// kernel choice. [`Kernel::Avx512`] gives packets ([`super::packet`]) AVX-512 lanes;
+/// single rays have no such lanes and run the AVX2 build.
+pub use crate::cpu::Kernel;
 
 impl Bvh {
     /// The nearest hit with `ctx.t_min <= t <= t_max`, nearest child first.
@@ -269,9 +262,7 @@ impl Bvh {
             type Output = ClosestHit;
             fn run<O: AxisOrder>(self) -> ClosestHit {
                 #[cfg(target_arch = "x86_64")]
-                if self.kernel != Kernel::Portable
-                    && let Some(cpu) = crate::cpu::Avx2::new()
-                {
+                if let Some(cpu) = self.kernel.avx2() {
                     // SAFETY: `Avx2::new` checked every feature this function enables;
                     // its body is safe code.
                     return unsafe {

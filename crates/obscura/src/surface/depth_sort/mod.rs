@@ -52,7 +52,7 @@
 //! - Painting: back to front, overwriting ([`crate::raster::PolygonCoverage`], the
 //!   shared top-left rule). A piece is painted as the pixels of its whole polygon (its
 //!   coverage and depth-key plane) on its sides of its cuts
-//!   (the painter in `surface::paint`), so the pieces of a polygon cover each of its pixels
+//!   (the painter in `surface::image::paint`), so the pieces of a polygon cover each of its pixels
 //!   exactly once: painted by their own vertices, a piece cut again left a crack along
 //!   the edge its sibling kept whole (a T-junction).
 //! - Candidates: a grid of screen tiles (about twice the median polygon box) lists
@@ -92,7 +92,7 @@ mod matrix;
 mod newell;
 mod work;
 
-use crate::surface::paint::{PaintMode, Painter};
+use crate::surface::image::paint::{PaintMode, Painter};
 use crate::surface::{RenderOptions, Stats};
 use crate::view::{PreparedView, ViewVertex};
 use crate::{Frame, Result};

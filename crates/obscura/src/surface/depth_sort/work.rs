@@ -6,7 +6,7 @@ use glam::DVec3;
 use crate::clip::split::{Split, split_polygon};
 use crate::geom::Plane;
 use crate::raster::{DepthPlane, FillRule, PixelRect, PolygonCoverage};
-use crate::surface::paint::{PixelRays, ScreenCut, piece_region};
+use crate::surface::image::paint::{PixelRays, ScreenCut, piece_region};
 use crate::view::{PreparedView, ViewTransform, ViewVertex};
 
 /// Relative tolerance of plane tests: a vertex within `RELATIVE_EPS * scale` of a

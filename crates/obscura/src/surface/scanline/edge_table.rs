@@ -19,10 +19,7 @@
 //! the polygons' order, then sorted by row) wrote 12 MB for Sponza's 443k edges and
 //! cost more than placing the edges as their polygons are set up.
 
-use crate::raster::EdgeFunction;
-#[cfg(doc)]
-use crate::raster::sample_rect;
-use crate::raster::{round_down, round_up, sample_range};
+use crate::raster::{EdgeFunction, round_down, round_up, sample_rect};
 use crate::view::{PreparedView, ViewPolygon};
 
 /// One entry of the active edge list: the seed's `(x_min, 1/m, y_max)`, the bound
@@ -255,12 +252,7 @@ fn sample_rows(
         miny = miny.min(y);
         maxy = maxy.max(y);
     }
-    if !(minx.is_finite() && miny.is_finite() && maxx.is_finite() && maxy.is_finite()) {
-        return None;
-    }
-    let (x0, x1) = sample_range(minx, maxx, width);
-    let (y0, y1) = sample_range(miny, maxy, height);
-    (x0 < x1 && y0 < y1).then_some((y0, y1))
+    sample_rect(minx, miny, maxx, maxy, width, height).map(|r| (r.y0, r.y1))
 }
 
 impl EdgeTable {

@@ -148,7 +148,8 @@ impl EdgeStore {
     }
 
     fn grow(&mut self) {
-        self.inline.extend_from_slice(&[NO_EDGE; INLINE_EDGES]);
+        self.inline
+            .extend_from_slice(&[EdgeFunction::UNSET; INLINE_EDGES]);
         self.overflow.push(Vec::new());
         self.pair_edge.push(Vec::new());
         self.count.push(0);
@@ -189,15 +190,6 @@ pub(crate) struct Faces {
     /// The `y` of the vertices of the last face set up, when it is a triangle.
     pub triangle_ys: Option<[f64; 3]>,
 }
-
-const NO_EDGE: EdgeFunction = EdgeFunction {
-    ox: 0.0,
-    oy: 0.0,
-    dx: 0.0,
-    dy: 0.0,
-    sign: 0.0,
-    include_zero: false,
-};
 
 const NO_PLANE: DepthPlane = DepthPlane {
     x0: 0.0,

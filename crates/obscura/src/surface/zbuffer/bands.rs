@@ -6,11 +6,12 @@
 //! the number of bands or threads.
 
 use crate::Frame;
-use crate::raster::FillRule;
+use crate::raster::{FillRule, sample_range};
 use crate::view::PreparedView;
 
 use super::Counts;
-use super::fast::{Band, Kernel, TILE, draw_band};
+use super::fast::{Band, TILE, draw_band};
+use crate::cpu::Kernel;
 
 /// Rows per band: one row of tiles.
 pub(super) const BAND_ROWS: u32 = TILE;
@@ -29,15 +30,14 @@ pub(super) fn thread_count() -> usize {
 }
 
 /// The bands `[b0, b1)` whose rows hold the samples of a polygon with vertices between
-/// rows `miny` and `maxy`, the same rows `sample_rect` finds; `None` when there are none.
+/// rows `miny` and `maxy` (the rows of `sample_rect`, by its [`sample_range`]); `None`
+/// when there are none.
 #[inline]
 fn band_range(miny: f64, maxy: f64, height: u32) -> Option<(u32, u32)> {
     if !(miny.is_finite() && maxy.is_finite()) {
         return None;
     }
-    let h = f64::from(height);
-    let y0 = (miny - 0.5).ceil().clamp(0.0, h) as u32;
-    let y1 = ((maxy - 0.5).floor() + 1.0).clamp(0.0, h) as u32;
+    let (y0, y1) = sample_range(miny, maxy, height);
     (y0 < y1).then(|| (y0 / BAND_ROWS, (y1 - 1) / BAND_ROWS + 1))
 }
 

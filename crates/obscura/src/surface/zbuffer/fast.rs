@@ -27,49 +27,12 @@
 
 use crate::Frame;
 #[cfg(target_arch = "x86_64")]
-use crate::raster::avx512::Avx512;
+use crate::cpu::Avx512;
+use crate::cpu::Kernel;
 use crate::raster::block::{self, Align, BlockSetup, BlockTarget, Counts};
-use crate::raster::lanes::{DepthOfKey, Lanes, Portable, lanes_below};
+use crate::raster::lanes::{Lanes, Portable, lanes_below};
 use crate::raster::{FillRule, PixelRect, PolygonCoverage, PolygonSetup};
-use crate::view::{PreparedView, ViewTransform};
-
-/// Which compiled variant of the drawing kernels to run. Every variant runs the same
-/// operations in the same order: they give identical frames.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Kernel {
-    /// Baseline instructions of the target (SSE2 on x86-64); always available.
-    Portable,
-    /// The portable lanes compiled for x86-64 with AVX2 (the compiler vectorizes them).
-    Avx2,
-    /// x86-64 with AVX-512 F, VL, BW and DQ: eight doubles per instruction, masks in
-    /// mask registers.
-    Avx512,
-}
-
-impl Kernel {
-    /// The fastest kernel this processor runs.
-    #[must_use]
-    pub fn detect() -> Kernel {
-        [Kernel::Avx512, Kernel::Avx2]
-            .into_iter()
-            .find(|k| k.is_available())
-            .unwrap_or(Kernel::Portable)
-    }
-
-    /// Whether this processor runs the kernel.
-    #[must_use]
-    pub fn is_available(self) -> bool {
-        match self {
-            Kernel::Portable => true,
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => crate::cpu::Avx2::is_available(),
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => Avx512::new().is_some(),
-            #[cfg(not(target_arch = "x86_64"))]
-            _ => false,
-        }
-    }
-}
+use crate::view::PreparedView;
 
 /// Side of a tile, in pixels: a tile's keys and ids take 32 KiB.
 pub(super) const TILE: u32 = 64;
@@ -500,27 +463,6 @@ fn draw_band_impl<L: Lanes>(
     }
 }
 
-/// Turns a whole frame of keys and encoded ids (`!id`, 0 where nothing was drawn)
-/// into depths and face ids, as the z-buffer's own tiles are resolved: the same
-/// [`Lanes::resolve_in_place`], with the fastest kernel this processor runs, so an
-/// algorithm that stores keys gives the z-buffer's depths bit for bit.
-pub(crate) fn resolve_frame(frame: &mut Frame, t: &ViewTransform) {
-    let depth = t.key_depths();
-    #[cfg(target_arch = "x86_64")]
-    if let Some(l) = Avx512::new() {
-        // SAFETY: `Avx512::new` checked every feature `resolve_frame_avx512` enables.
-        unsafe { resolve_frame_avx512(l, frame, depth) };
-        return;
-    }
-    Portable.resolve_in_place(&mut frame.depth, &mut frame.ids, depth);
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
-fn resolve_frame_avx512(l: Avx512, frame: &mut Frame, depth: DepthOfKey) {
-    l.resolve_in_place(&mut frame.depth, &mut frame.ids, depth);
-}
-
 fn draw_band_portable(
     view: &PreparedView<'_>,
     polygons: impl Iterator<Item = usize>,
@@ -554,8 +496,9 @@ fn draw_band_avx512(
     draw_band_impl(l, view, polygons, fill, band)
 }
 
-/// Draws `polygons` into the band with the kernel (the portable one if the processor
-/// lacks the kernel's instructions), and resolves the band.
+/// Draws `polygons` into the band with the kernel (the best one below it if the
+/// processor lacks the kernel's instructions: [`Kernel::resolve`]), and resolves the
+/// band.
 pub(super) fn draw_band(
     view: &PreparedView<'_>,
     polygons: impl Iterator<Item = usize>,
@@ -564,20 +507,15 @@ pub(super) fn draw_band(
     band: &mut Band<'_>,
 ) -> super::Counts {
     #[cfg(target_arch = "x86_64")]
-    match kernel {
-        Kernel::Avx512 => {
-            if let Some(l) = Avx512::new() {
-                // SAFETY: `Avx512::new` checked every feature `draw_band_avx512` enables.
-                return unsafe { draw_band_avx512(l, view, polygons, fill, band) };
-            }
+    {
+        if let Some(l) = kernel.avx512() {
+            // SAFETY: `Avx512::new` checked every feature `draw_band_avx512` enables.
+            return unsafe { draw_band_avx512(l, view, polygons, fill, band) };
         }
-        Kernel::Avx2 => {
-            if let Some(cpu) = crate::cpu::Avx2::new() {
-                // SAFETY: `Avx2::new` checked every feature `draw_band_avx2` enables.
-                return unsafe { draw_band_avx2(cpu, view, polygons, fill, band) };
-            }
+        if let Some(cpu) = kernel.avx2() {
+            // SAFETY: `Avx2::new` checked every feature `draw_band_avx2` enables.
+            return unsafe { draw_band_avx2(cpu, view, polygons, fill, band) };
         }
-        _ => {}
     }
     draw_band_portable(view, polygons, fill, band)
 }

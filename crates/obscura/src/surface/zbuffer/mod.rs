@@ -1,7 +1,9 @@
 //! The z-buffer: the reference every other algorithm is checked against.
 //!
 //! Sources: seed 000 ("Αλγόριθμος Z-buffer"), 002 ("Algoritmo Z-Buffer"), 003
-//! ("Buffer de adâncime"), 004 ("Алгоритм z-буфера"). For each polygon, for each pixel it
+//! ("Buffer de adâncime"), 004 ("Алгоритм z-буфера"); Catmull, *A subdivision
+//! algorithm for computer display of curved surfaces* (PhD thesis, University of Utah,
+//! 1974), the z-buffer. For each polygon, for each pixel it
 //! covers, compute the depth from the polygon's plane and keep it if it is nearer than
 //! what the buffer holds. Along a span the depth is stepped incrementally,
 //! `z(x + 1) = z(x) + dz/dx` (the seeds' `z - a/c`), re-anchored from the plane equation
@@ -20,7 +22,9 @@
 //! [`PolygonCoverage`](crate::raster::PolygonCoverage) per polygon, the depth stepped
 //! serially along each span. [`render`] computes the same picture faster with the block
 //! rasterizer of [`crate::raster::block`]:
-//! - coverage by the same canonical edge expression, bit for bit: narrow polygons row
+//! - coverage by the shared rule's canonical edge expression, evaluated in lanes (a
+//!   deliberate twin of [`EdgeFunction::inside`](crate::raster::EdgeFunction::inside),
+//!   which `raster::block`'s tests compare with it pixel by pixel): narrow polygons row
 //!   by row, wider ones in 16x8 blocks classified exactly by their corners (covered
 //!   blocks drawn without edge tests);
 //! - the depth key evaluated per pixel from the plane (no serial chain, so any pixel
@@ -67,8 +71,8 @@ use crate::surface::{RenderOptions, Stats};
 use crate::view::PreparedView;
 use crate::{Frame, Result};
 
-pub(crate) use fast::resolve_frame;
-pub use fast::{BIG, Kernel};
+pub use crate::cpu::Kernel;
+pub use fast::BIG;
 
 /// Renders a prepared view with the z-buffer (the fast implementation; same result as
 /// [`render_reference`]).

@@ -2,8 +2,15 @@
 //! against the rays of a packet, and the watertight test of one triangle against eight
 //! of them.
 //!
+//! [`PacketLanes`] is the crate's second lane abstraction, with another purpose than
+//! the rasterizer's [`crate::raster::lanes::Lanes`] (eight `f64` lanes across the
+//! pixels of a row or the edges of a polygon): here a lane is a ray of a packet, boxes
+//! are tested in `f32` sixteen rays at a time and triangles in `f64` eight at a time,
+//! and the results are ray masks. The two share nothing but the CPU tokens of
+//! [`crate::cpu`].
+//!
 //! [`Portable`] is plain Rust (the reference, compiled for any processor, and also for
-//! AVX2 where the compiler vectorizes it); [`Avx512`] computes the same with AVX-512
+//! AVX2 where the compiler vectorizes it); [`Avx512`](crate::cpu::Avx512) computes the same with AVX-512
 //! intrinsics: sixteen rays in one register for boxes, eight in `f64` for triangles,
 //! with the comparisons producing the ray masks directly. Both run the same IEEE
 //! operations in the same order on the same inputs (no fused multiply-add; `min` and
@@ -11,14 +18,14 @@
 //! NaN included), so their masks and parameters are equal bit for bit; the tests
 //! compare them lane by lane.
 //!
-//! Safety: an [`Avx512`] value exists only after run-time detection of the features
+//! Safety: an [`Avx512`](crate::cpu::Avx512) value exists only after run-time detection of the features
 //! (its constructor checks them), so holding one justifies the `unsafe` calls of its
 //! target-feature functions; the other `unsafe` blocks are unaligned loads and stores
 //! of whole arrays of the right length.
 
 use glam::DVec3;
 
-use super::packet::{CHUNK, Frustum, Mask, PACKET, RayPacket};
+use super::ray_packet::{CHUNK, Frustum, Mask, PACKET, RayPacket};
 use super::traverse::{WIDEN, max, min, widen_down, widen_up};
 use super::{BvhNode, WIDTH};
 use crate::accel::triangles::AxisOrder;
@@ -49,7 +56,7 @@ fn reduce_masked(
 }
 
 /// What the packet traversal needs from lane arithmetic.
-pub(super) trait Lanes: Copy {
+pub(super) trait PacketLanes: Copy {
     /// The rays of `mask` that enter child `k` of `n` (its grown box) within
     /// `[t_lo, t_hi[ray]]`, and the smallest of their entry distances (meaningless
     /// when none enters).
@@ -95,7 +102,7 @@ pub(super) trait Lanes: Copy {
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Portable;
 
-impl Lanes for Portable {
+impl PacketLanes for Portable {
     #[inline(always)]
     fn children(self, f: &Frustum, n: &BvhNode, t_lo: f32, t_far: f32) -> u32 {
         let mut near = [t_lo; WIDTH];
@@ -226,22 +233,19 @@ impl Lanes for Portable {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(super) use x86::Avx512;
-
-#[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::*;
 
     use glam::DVec3;
 
-    use super::{BvhNode, CHUNK, Frustum, Lanes, Mask, PACKET, RayPacket, WIDEN};
+    use super::{BvhNode, CHUNK, Frustum, Mask, PACKET, PacketLanes, RayPacket, WIDEN};
     use crate::accel::triangles::AxisOrder;
 
     /// AVX-512 lanes: the crate's one AVX-512 token, whose constructor checks every
     /// feature the functions below enable.
-    pub(in crate::accel::bvh) use crate::cpu::Avx512;
+    use crate::cpu::Avx512;
 
-    impl Lanes for Avx512 {
+    impl PacketLanes for Avx512 {
         #[inline(always)]
         fn children(self, f: &Frustum, n: &BvhNode, t_lo: f32, t_far: f32) -> u32 {
             // SAFETY: an `Avx512` exists only when the processor has the features.
@@ -461,6 +465,8 @@ mod tests {
     use crate::accel::bvh::traverse::BoxRay;
     use crate::accel::bvh::{WIDTH, f32_down, f32_up};
     use crate::accel::triangles::{OrderXzy, OrderYxz, PrimaryRays, TieRule, WatertightRay};
+    #[cfg(target_arch = "x86_64")]
+    use crate::cpu::Avx512;
     use crate::scene::demo::SplitMix64;
     use crate::scene::{Camera, Viewport};
 

@@ -32,6 +32,9 @@
 //! on the edge its sibling shares, and a pixel centre on that edge falls between them).
 //!
 //! Cost: O(rows + pixels) per polygon.
+//!
+//! Source: Newell, Newell and Sancha, *A solution to the hidden surface problem* (ACM
+//! National Conference, 1972), painting in depth order.
 
 use glam::DVec3;
 
