@@ -58,8 +58,9 @@ use std::time::Instant;
 use glam::DVec3;
 
 use crate::clip::split::{Split, split_polygon};
-use crate::geom::{Aabb, Plane};
-use crate::scene::{Camera, Projection, Scene, demo::SplitMix64};
+use crate::geom::{Aabb, Plane, PlaneSide};
+use crate::rng::SplitMix64;
+use crate::scene::{Camera, Projection, Scene};
 use crate::{Error, Result};
 
 /// The order in which [`BspTree::traverse`] visits fragments.
@@ -451,15 +452,6 @@ enum Splitter {
     Axis(Plane),
 }
 
-/// Where a fragment lies relative to a plane.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Side {
-    Front,
-    Back,
-    On,
-    Spanning,
-}
-
 impl BspTree {
     /// Builds the tree of every polygon of every object of the scene. An empty scene
     /// gives an empty tree. Fails only on invalid options.
@@ -598,10 +590,10 @@ impl BspTree {
                     continue;
                 }
                 match self.classify(f, &plane, eps) {
-                    Side::Front => front.push(f),
-                    Side::Back => back.push(f),
-                    Side::On => on.push(f),
-                    Side::Spanning => {
+                    PlaneSide::Front => front.push(f),
+                    PlaneSide::Back => back.push(f),
+                    PlaneSide::On => on.push(f),
+                    PlaneSide::Spanning => {
                         let (a, b) = self.split(f, n, &plane, eps, &mut points);
                         front.extend(a);
                         back.extend(b);
@@ -730,10 +722,10 @@ impl BspTree {
                     continue;
                 }
                 match self.classify(set[i], plane, eps) {
-                    Side::Front => front += 1,
-                    Side::Back => back += 1,
-                    Side::Spanning => spans += 1,
-                    Side::On => {}
+                    PlaneSide::Front => front += 1,
+                    PlaneSide::Back => back += 1,
+                    PlaneSide::Spanning => spans += 1,
+                    PlaneSide::On => {}
                 }
             }
             let cost = options.split_weight * spans as f64
@@ -798,13 +790,13 @@ impl BspTree {
         let (mut front, mut back) = (0usize, 0usize);
         for &f in set {
             match self.classify(f, plane, self.eps) {
-                Side::Front => front += 1,
-                Side::Back => back += 1,
-                Side::Spanning => {
+                PlaneSide::Front => front += 1,
+                PlaneSide::Back => back += 1,
+                PlaneSide::Spanning => {
                     front += 1;
                     back += 1;
                 }
-                Side::On => {}
+                PlaneSide::On => {}
             }
         }
         front < set.len() && back < set.len()
@@ -828,33 +820,27 @@ impl BspTree {
         eps.max(self.own_eps(f))
     }
 
-    fn classify(&self, f: u32, plane: &Plane, eps: f64) -> Side {
+    /// Where fragment `f` lies relative to `plane`, by the rule `split_polygon` splits
+    /// with ([`PlaneSide::of_distance`]), so both agree on every vertex.
+    fn classify(&self, f: u32, plane: &Plane, eps: f64) -> PlaneSide {
         let eps = self.pair_eps(f, eps);
-        let len = plane.normal.length();
         // Most fragments are far from the plane: their bounding sphere decides without
         // reading the vertices (with a margin far above rounding).
         let [cx, cy, cz, r] = self.spheres[f as usize];
-        let d = plane.evaluate(DVec3::new(cx, cy, cz)) / len;
+        let d = plane.signed_distance(DVec3::new(cx, cy, cz));
         if d - r > eps + self.slack {
-            return Side::Front;
+            return PlaneSide::Front;
         }
         if d + r < -eps - self.slack {
-            return Side::Back;
+            return PlaneSide::Back;
         }
         let frag = &self.fragments[f as usize];
-        let (mut front, mut back) = (false, false);
-        for &v in self.fragment_indices(frag) {
-            // The same expression as `split_polygon`, so both agree on every vertex.
-            let d = plane.evaluate(self.local[v as usize]) / len;
-            front |= d > eps;
-            back |= d < -eps;
-        }
-        match (front, back) {
-            (true, true) => Side::Spanning,
-            (true, false) => Side::Front,
-            (false, true) => Side::Back,
-            (false, false) => Side::On,
-        }
+        plane.classify_points(
+            self.fragment_indices(frag)
+                .iter()
+                .map(|&v| self.local[v as usize]),
+            eps,
+        )
     }
 
     /// Splits fragment `f` by the plane of node `node`; returns the new front and back

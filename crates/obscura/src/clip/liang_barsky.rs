@@ -36,8 +36,7 @@
 use super::InRange;
 use glam::{DVec2, DVec3, DVec4};
 
-use super::Rect;
-use super::cohen_sutherland::valid_box;
+use super::{Rect, valid_box};
 use crate::geom::Aabb;
 
 /// The `t` interval where every `t p_i <= q_i` holds, within `[0, 1]`.

@@ -67,34 +67,18 @@ pub fn split_polygon(points: &[DVec3], plane: &Plane, eps: f64) -> Split {
     }
     // A negative or NaN tolerance would make a vertex both sides of the plane.
     let eps = if eps > 0.0 { eps } else { 0.0 };
-    let dist: Vec<f64> = points.iter().map(|&p| plane.evaluate(p) / len).collect();
-    let side = |d: f64| {
-        if d > eps {
-            PlaneSide::Front
-        } else if d < -eps {
-            PlaneSide::Back
-        } else {
-            PlaneSide::On
-        }
-    };
-    let (mut front, mut back) = (false, false);
-    for &d in &dist {
-        match side(d) {
-            PlaneSide::Front => front = true,
-            PlaneSide::Back => back = true,
-            _ => {}
-        }
-    }
-    match (front, back) {
-        (false, false) => {
+    let dist: Vec<f64> = points.iter().map(|&p| plane.signed_distance(p)).collect();
+    let side = |d: f64| PlaneSide::of_distance(d, eps);
+    match PlaneSide::of_distances(dist.iter().copied(), eps) {
+        PlaneSide::On => {
             let n = crate::geom::newell_normal(points);
             return Split::Coplanar {
                 same_direction: n.dot(plane.normal) >= 0.0,
             };
         }
-        (true, false) => return Split::Front,
-        (false, true) => return Split::Back,
-        (true, true) => {}
+        PlaneSide::Front => return Split::Front,
+        PlaneSide::Back => return Split::Back,
+        PlaneSide::Spanning => {}
     }
     let n = points.len();
     let (mut f, mut b) = (Vec::with_capacity(n + 1), Vec::with_capacity(n + 1));

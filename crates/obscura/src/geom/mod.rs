@@ -11,6 +11,7 @@ pub mod kdop;
 pub mod obb;
 mod plane;
 mod polygon;
+pub(crate) mod slab;
 mod sphere;
 
 pub use aabb::Aabb;

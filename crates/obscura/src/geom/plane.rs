@@ -29,6 +29,45 @@ pub enum PlaneSide {
     Spanning,
 }
 
+impl PlaneSide {
+    /// The side of a point at signed distance `d` ([`Plane::signed_distance`]), with
+    /// `|d| <= eps` counted as on the plane (a NaN distance too). This and
+    /// [`Plane::classify_points`] are the one rule of which side a point and a polygon
+    /// lie on: clipping by a plane, the BSP tree and depth sort all decide with them.
+    #[inline]
+    #[must_use]
+    pub fn of_distance(d: f64, eps: f64) -> PlaneSide {
+        if d > eps {
+            PlaneSide::Front
+        } else if d < -eps {
+            PlaneSide::Back
+        } else {
+            PlaneSide::On
+        }
+    }
+
+    /// The side of a set of points from their signed distances: `Spanning` if some are
+    /// strictly in front and some strictly behind (beyond `eps`), `On` if none is
+    /// beyond `eps`.
+    #[must_use]
+    pub fn of_distances(distances: impl IntoIterator<Item = f64>, eps: f64) -> PlaneSide {
+        let (mut front, mut back) = (false, false);
+        for d in distances {
+            match PlaneSide::of_distance(d, eps) {
+                PlaneSide::Front => front = true,
+                PlaneSide::Back => back = true,
+                _ => {}
+            }
+        }
+        match (front, back) {
+            (true, true) => PlaneSide::Spanning,
+            (true, false) => PlaneSide::Front,
+            (false, true) => PlaneSide::Back,
+            (false, false) => PlaneSide::On,
+        }
+    }
+}
+
 impl Plane {
     /// The plane with this normal through this point.
     #[must_use]
@@ -153,7 +192,11 @@ impl Plane {
         self.normal.dot(p) + self.d
     }
 
-    /// The signed Euclidean distance of `p` (the normal need not be unit length).
+    /// The signed Euclidean distance of `p` (the normal need not be unit length):
+    /// `evaluate(p) / |normal|`. Every "which side of this plane" decision of the crate
+    /// goes through it ([`PlaneSide::of_distance`]), so that a classification and the
+    /// split that follows it agree on every vertex.
+    #[inline]
     #[must_use]
     pub fn signed_distance(&self, p: DVec3) -> f64 {
         self.evaluate(p) / self.normal.length()
@@ -181,34 +224,21 @@ impl Plane {
     /// Which side `p` is on, with `|signed distance| <= eps` counted as on the plane.
     #[must_use]
     pub fn side_of(&self, p: DVec3, eps: f64) -> PlaneSide {
-        let s = self.signed_distance(p);
-        if s > eps {
-            PlaneSide::Front
-        } else if s < -eps {
-            PlaneSide::Back
-        } else {
-            PlaneSide::On
-        }
+        PlaneSide::of_distance(self.signed_distance(p), eps)
     }
 
     /// Which side a polygon is on: `Spanning` if it has vertices strictly on both
     /// sides, `On` if every vertex is within `eps`.
     #[must_use]
     pub fn classify_polygon(&self, points: &[DVec3], eps: f64) -> PlaneSide {
-        let (mut front, mut back) = (false, false);
-        for &p in points {
-            match self.side_of(p, eps) {
-                PlaneSide::Front => front = true,
-                PlaneSide::Back => back = true,
-                _ => {}
-            }
-        }
-        match (front, back) {
-            (true, true) => PlaneSide::Spanning,
-            (true, false) => PlaneSide::Front,
-            (false, true) => PlaneSide::Back,
-            (false, false) => PlaneSide::On,
-        }
+        self.classify_points(points.iter().copied(), eps)
+    }
+
+    /// [`Plane::classify_polygon`] for points given one by one (vertices read through
+    /// an index list, say).
+    #[must_use]
+    pub fn classify_points(&self, points: impl IntoIterator<Item = DVec3>, eps: f64) -> PlaneSide {
+        PlaneSide::of_distances(points.into_iter().map(|p| self.signed_distance(p)), eps)
     }
 
     /// Where the segment `a`-`b` meets the plane, as the parameter `t` of `a + t(b-a)`;
