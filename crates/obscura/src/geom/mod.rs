@@ -13,18 +13,17 @@ mod plane;
 mod polygon;
 pub(crate) mod slab;
 mod sphere;
+mod triangulate;
 
 pub use aabb::Aabb;
 pub use kdop::{Kdop, KdopKind, RaySlabs};
 pub use obb::Obb;
 pub use plane::{Plane, PlaneSide};
-#[cfg(test)]
-pub(crate) use polygon::triangulate_within;
-pub use polygon::{
-    Triangulation, is_convex, max_plane_deviation, newell_normal, polygon_area, polygon_centroid,
-    triangulate, triangulate_reporting,
-};
+pub use polygon::{is_convex, max_plane_deviation, newell_normal, polygon_area, polygon_centroid};
 pub use sphere::Sphere;
+#[cfg(test)]
+pub(crate) use triangulate::triangulate_within;
+pub use triangulate::{Triangulation, triangulate, triangulate_reporting};
 
 /// A kind of bounding volume (for ray casting with per-object bounds, and culling).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
