@@ -35,6 +35,9 @@
 //! # Limitations
 //! The segment must be given in the space of the window: for perspective views use the
 //! homogeneous form before the divide by `w` (see [`super::projection_order`]).
+//!
+//! Paper: Cohen and Sutherland's outcode clipper, published in Newman and Sproull,
+//! "Principles of Interactive Computer Graphics", 2nd ed., McGraw-Hill, 1979.
 
 use super::InRange;
 use glam::{DVec2, DVec3, DVec4};

@@ -32,6 +32,9 @@
 //!
 //! # Complexity
 //! `O(1)`: one division per boundary the segment is not parallel to, no iteration.
+//!
+//! Paper: Liang and Barsky, "A new concept and method for line clipping", ACM
+//! Transactions on Graphics 3(1), 1984.
 
 use super::InRange;
 use glam::{DVec2, DVec3, DVec4};

@@ -29,6 +29,9 @@
 //! range (a coordinate that is not finite or beyond [`MAX_CLIP_COORDINATE`], where
 //! differences of two coordinates would overflow); the tests in `tests/clipping.rs`
 //! check that all of them agree. Windows and boxes beyond that range are refused too.
+//!
+//! Papers: each clipper's module cites its own; clipping before the divide is Blinn and
+//! Newell, "Clipping using homogeneous coordinates", SIGGRAPH 1978.
 
 pub mod cohen_sutherland;
 pub mod liang_barsky;

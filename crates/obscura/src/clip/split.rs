@@ -11,6 +11,10 @@
 //! on it: they go to both pieces, and a polygon with all vertices on the plane is
 //! coplanar, not split. Intersections are computed from the front endpoint towards the
 //! back one, so two polygons sharing an edge get bit-identical new vertices.
+//!
+//! Papers: Sutherland and Hodgman, "Reentrant polygon clipping", CACM 17(1), 1974 (the
+//! one stage extended here); Fuchs, Kedem and Naylor, "On visible surface generation by
+//! a priori tree structures", SIGGRAPH 1980 (splitting by a plane).
 
 use super::InRange;
 use glam::DVec3;

@@ -39,6 +39,9 @@
 //! The input should be convex (the output of a concave polygon may have overlapping
 //! edges, as the algorithm is known to produce). Output vertex count is at most
 //! `n + 6` in 3D, `n + m` against an `m`-edge window.
+//!
+//! Paper: Sutherland and Hodgman, "Reentrant polygon clipping", Communications of the
+//! ACM 17(1), 1974.
 
 use super::InRange;
 use glam::{DVec2, DVec3, DVec4};

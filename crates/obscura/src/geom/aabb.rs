@@ -1,4 +1,7 @@
 //! Axis-aligned bounding boxes.
+//!
+//! Paper: Rubin and Whitted, "A 3-dimensional representation for fast rendering of
+//! complex scenes", SIGGRAPH 1980 (hierarchies of bounding boxes).
 
 use glam::{DMat4, DVec3};
 

@@ -24,6 +24,9 @@
 //! - Limitations: the directions are fixed in world space, so a thin object at an
 //!   angle none of them matches keeps some empty space (an OBB adapts, a k-DOP does
 //!   not).
+//!
+//! Paper: Klosowski, Held, Mitchell, Sowizral and Zikan, "Efficient collision detection
+//! using bounding volume hierarchies of k-DOPs", IEEE TVCG 4(1), 1998.
 
 use glam::DVec3;
 

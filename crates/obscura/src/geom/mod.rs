@@ -3,6 +3,9 @@
 //! Everything here works in `f64`: these are the computations that decide topology
 //! (which side of a plane, which polygon is in front), so they must not flip under
 //! rounding. Epsilons are documented where they are used.
+//!
+//! Papers: each module cites its own (Newell's normal, Ritter 1990, Gottschalk et al.
+//! 1996, Klosowski et al. 1998, Kay and Kajiya 1986, Meisters 1975).
 
 use glam::DVec3;
 

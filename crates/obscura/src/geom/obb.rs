@@ -27,6 +27,9 @@
 //! - Complexity: O(n) (a constant number of passes over the points).
 //! - Limitations: not the minimum-volume box; PCA is biased by vertex density, which
 //!   the world-axes candidate and the descent partly correct.
+//!
+//! Paper: Gottschalk, Lin and Manocha, "OBBTree: a hierarchical structure for rapid
+//! interference detection", SIGGRAPH 1996.
 
 use glam::{DMat3, DVec3};
 

@@ -3,6 +3,10 @@
 //! Source: seed 004 ("Визначення рівняння площини ... методом Н'юела"), which writes
 //! the plane of the z-buffer task's triangle as `3x + y + 4z - 120 = 0` by solving
 //! `(a/d, b/d, c/d) · M = (-1, -1, -1)` with Cramer's rule.
+//!
+//! Paper: Newell's method as given in Sutherland, Sproull and Schumacher, "A
+//! characterization of ten hidden-surface algorithms", ACM Computing Surveys 6(1),
+//! 1974.
 
 use glam::DVec3;
 

@@ -1,4 +1,7 @@
 //! Bounding spheres.
+//!
+//! Paper: Ritter, "An efficient bounding sphere", in Graphics Gems (Glassner, ed.),
+//! Academic Press, 1990.
 
 use glam::DVec3;
 

@@ -1,5 +1,8 @@
 //! The polygons depth sort works on: the view's polygons and the pieces made by
 //! splitting them, with their eye-space planes, extents and the pairwise tests.
+//!
+//! Paper: Newell, Newell and Sancha, "A solution to the hidden surface problem",
+//! Proceedings of the ACM Annual Conference, 1972 (the tests and splits).
 
 use glam::DVec3;
 
