@@ -359,4 +359,45 @@ mod tests {
         assert_eq!(p.intersect_segment(tri[0], tri[1]), Some(0.5));
         assert_eq!(p.side_of(DVec3::new(0., 0., 1e-12), 1e-9), PlaneSide::On);
     }
+
+    #[test]
+    fn one_side_rule_for_points_and_polygons() {
+        // Beyond eps on either side; within it (both ends included) and NaN: on.
+        assert_eq!(PlaneSide::of_distance(0.25, 0.125), PlaneSide::Front);
+        assert_eq!(PlaneSide::of_distance(-0.25, 0.125), PlaneSide::Back);
+        assert_eq!(PlaneSide::of_distance(0.125, 0.125), PlaneSide::On);
+        assert_eq!(PlaneSide::of_distance(-0.125, 0.125), PlaneSide::On);
+        assert_eq!(PlaneSide::of_distance(f64::NAN, 0.125), PlaneSide::On);
+        assert_eq!(PlaneSide::of_distances([], 0.0), PlaneSide::On);
+        assert_eq!(
+            PlaneSide::of_distances([0.0, 1.0, 0.0], 0.5),
+            PlaneSide::Front
+        );
+        assert_eq!(PlaneSide::of_distances([-1.0, 0.25], 0.5), PlaneSide::Back);
+        assert_eq!(
+            PlaneSide::of_distances([-1.0, 1.0], 0.5),
+            PlaneSide::Spanning
+        );
+        // A plane with a normal of length 2: distances are Euclidean (z = 3 is 1 above
+        // z = 2), so eps is a distance whatever the normal's length.
+        let p = Plane {
+            normal: DVec3::new(0.0, 0.0, 2.0),
+            d: -4.0,
+        };
+        assert_eq!(p.signed_distance(DVec3::new(5.0, -1.0, 3.0)), 1.0);
+        assert_eq!(p.side_of(DVec3::new(0.0, 0.0, 2.75), 0.5), PlaneSide::Front);
+        assert_eq!(p.side_of(DVec3::new(0.0, 0.0, 2.75), 0.75), PlaneSide::On);
+        assert_eq!(p.side_of(DVec3::new(0.0, 0.0, 1.0), 0.5), PlaneSide::Back);
+        let tri = [
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(1.0, 0.0, 2.0),
+            DVec3::new(0.0, 1.0, 2.0),
+        ];
+        assert_eq!(p.classify_polygon(&tri, 0.5), PlaneSide::Back);
+        assert_eq!(p.classify_points(tri.iter().copied(), 1.0), PlaneSide::On);
+        assert_eq!(
+            p.classify_points(tri.iter().map(|&q| q + DVec3::Z * 0.5), 0.25),
+            PlaneSide::Spanning
+        );
+    }
 }
