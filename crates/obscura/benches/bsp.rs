@@ -4,7 +4,8 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
 use obscura::accel::bsp::{BspOptions, BspTraversal, BspTree};
-use obscura::scene::demo::{self, SplitMix64};
+use obscura::rng::SplitMix64;
+use obscura::scene::demo;
 use obscura::scene::{MeshBuilder, ObjectDesc, Scene};
 use obscura::surface::{RenderOptions, bsp};
 use obscura::{PrepareOptions, Viewport, prepare};

@@ -15,7 +15,7 @@ use glam::{DVec2, DVec3, DVec4};
 use obscura::clip::sutherland_hodgman as sh;
 use obscura::clip::{ConvexWindow, Rect, cohen_sutherland as cs, liang_barsky as lb, region_codes};
 use obscura::geom::Aabb;
-use obscura::scene::demo::SplitMix64;
+use obscura::rng::SplitMix64;
 
 const BATCH: usize = 1024;
 const MIXES: [&str; 3] = ["inside", "crossing", "outside"];

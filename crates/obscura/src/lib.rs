@@ -39,6 +39,8 @@ pub mod frame;
 pub mod geom;
 pub mod memory;
 pub mod raster;
+#[doc(hidden)]
+pub mod rng;
 pub mod scene;
 pub mod surface;
 pub mod view;

@@ -5,7 +5,8 @@
 use glam::{DMat4, DVec3};
 use obscura::accel::bsp::{BspOptions, BspTraversal, BspTree, Viewpoint};
 use obscura::geom::polygon_area;
-use obscura::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport, demo, demo::SplitMix64};
+use obscura::rng::SplitMix64;
+use obscura::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport, demo};
 use obscura::surface::{RenderOptions, bsp};
 use obscura::{BACKGROUND, PreparedView};
 

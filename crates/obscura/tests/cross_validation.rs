@@ -411,7 +411,7 @@ fn the_harness_rejects_an_approximate_algorithm() {
 /// A scene on a lattice of dyadic coordinates, seen orthographically so that pixel
 /// centres fall exactly on edges and vertices: a height field of triangles sharing
 /// their edges, lattice triangles crossing it, and boxes, all inside a `w x h` window.
-fn lattice_scene(rng: &mut demo::SplitMix64, w: u32, h: u32) -> (Scene, Camera) {
+fn lattice_scene(rng: &mut obscura::rng::SplitMix64, w: u32, h: u32) -> (Scene, Camera) {
     let mut pick = |n: u64| (rng.next_u64() % n) as f64;
     let mut polys: Vec<Vec<DVec3>> = Vec::new();
     let (nx, ny) = (1 + pick(6) as usize, 1 + pick(6) as usize);
@@ -488,7 +488,7 @@ fn lattice_scene(rng: &mut demo::SplitMix64, w: u32, h: u32) -> (Scene, Camera) 
 /// must show background exactly where the z-buffer does.
 #[test]
 fn split_pieces_leave_no_cracks_on_lattice_scenes() {
-    let mut rng = demo::SplitMix64(2026);
+    let mut rng = obscura::rng::SplitMix64(2026);
     let sizes = [(13, 7), (16, 8), (32, 32), (31, 17), (64, 16)];
     let algorithms = [
         Algorithm::Bsp,

@@ -553,7 +553,7 @@ fn random_tree(seed: u64, depth: u32) -> Octree {
     // Coarse blocks in one half, fine noise in the other, so that neighbours of every
     // size meet.
     let hash = |a: u32, b: u32, c: u32, s: u32| {
-        let mut r = demo::SplitMix64(
+        let mut r = obscura::rng::SplitMix64(
             seed ^ (u64::from(a) << 40 | u64::from(b) << 20 | u64::from(c)) ^ u64::from(s) << 60,
         );
         r.next_u64() % 3
@@ -679,7 +679,7 @@ fn slab(o: DVec3, d: DVec3, min: DVec3, max: DVec3) -> Option<(f64, f64)> {
 
 #[test]
 fn child_order_is_front_to_back_for_every_ray_octant() {
-    let mut rng = demo::SplitMix64(5);
+    let mut rng = obscura::rng::SplitMix64(5);
     let region = Region::new(DVec3::ZERO, 1.0).unwrap();
     for octant in 0..8u32 {
         let mut checked = 0;
@@ -728,7 +728,7 @@ fn first_hit_is_the_nearest_partial_voxel() {
         .filter(|&i| tree.node(i).kind() == NodeKind::Partial)
         .map(|i| (i, region.cell_box(tree.cell(i))))
         .collect();
-    let mut rng = demo::SplitMix64(9);
+    let mut rng = obscura::rng::SplitMix64(9);
     let (mut hits, mut misses) = (0, 0);
     for k in 0..400 {
         let o = region.min()

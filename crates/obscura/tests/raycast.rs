@@ -145,7 +145,7 @@ fn check_scene(name: &str, scene: &Scene, cam: &Camera, w: u32, h: u32, backface
 }
 
 fn random_triangles(count: usize, seed: u64) -> Scene {
-    let mut rng = demo::SplitMix64(seed);
+    let mut rng = obscura::rng::SplitMix64(seed);
     let mut b = MeshBuilder::new();
     for _ in 0..count {
         let c = DVec3::new(
@@ -711,7 +711,7 @@ fn incoherent_packets_and_missing_rays_equal_single_rays() {
         t_min: 0.0,
         tie: rays.tie_rule(),
     };
-    let mut rng = demo::SplitMix64(21);
+    let mut rng = obscura::rng::SplitMix64(21);
     let mut v = |scale: f64| {
         DVec3::new(
             rng.range(-scale, scale),
@@ -1002,7 +1002,7 @@ proptest! {
 /// Triangles in the plane z = 0 (`flat`) or in a box, inside `[-1, 1]^3`, scaled by
 /// `size` and moved to `centre`; one triangle across the box for `count` 1.
 fn scaled_triangles(count: usize, seed: u64, flat: bool, size: f64, centre: DVec3) -> Scene {
-    let mut rng = demo::SplitMix64(seed);
+    let mut rng = obscura::rng::SplitMix64(seed);
     let mut b = MeshBuilder::new();
     if count == 1 {
         // One triangle across the whole box.

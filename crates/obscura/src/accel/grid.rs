@@ -526,7 +526,7 @@ impl UniformGrid {
         }
         let (mut t0, mut t1) = (ctx.t_min, t_max);
         for k in 0..3 {
-            if !crate::geom::obb::slab(
+            if !crate::geom::slab::slab(
                 o[k],
                 d[k],
                 self.bounds.min[k] - tau,
@@ -744,7 +744,7 @@ pub fn triangle_overlaps_box(tri: &[DVec3; 3], center: DVec3, half: DVec3) -> bo
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::demo::SplitMix64;
+    use crate::rng::SplitMix64;
 
     #[test]
     fn every_cell_a_triangle_meets_lists_it() {

@@ -41,7 +41,7 @@ use glam::DVec3;
 
 use crate::cull::backface::{BackfaceMode, is_back_facing_parallel, is_back_facing_perspective};
 use crate::geom::newell_normal;
-use crate::scene::{Camera, Projection, Scene, Viewport};
+use crate::scene::{Camera, ImageRays, Projection, Scene, Viewport};
 
 /// The world-space triangles of a scene (fan triangulation of its polygons).
 #[derive(Clone, Debug, Default)]
@@ -202,20 +202,12 @@ impl SceneTriangles {
     }
 }
 
-/// The primary rays of a camera: one through each pixel centre, computed exactly as
-/// [`Camera::ray`] does (same expression, bit for bit) with the camera's basis and
-/// window computed once.
+/// The primary rays of a camera: one through each pixel centre, computed by the one
+/// function [`Camera::ray`] calls too (so both give the same rays), with the camera's
+/// basis and window computed once.
 #[derive(Clone, Copy, Debug)]
 pub struct PrimaryRays {
-    right: DVec3,
-    up: DVec3,
-    forward: DVec3,
-    eye: DVec3,
-    half_width: f64,
-    half_height: f64,
-    width: f64,
-    height: f64,
-    orthographic: bool,
+    rays: ImageRays,
     /// Near plane distance (the smallest accepted `t`).
     pub near: f64,
     /// Far plane distance (the largest accepted `t`).
@@ -229,18 +221,8 @@ impl PrimaryRays {
     /// The rays of a camera for a viewport.
     #[must_use]
     pub fn new(camera: &Camera, viewport: Viewport) -> Self {
-        let (right, up, forward) = camera.basis();
-        let (half_width, half_height) = camera.half_extents(viewport.aspect());
         PrimaryRays {
-            right,
-            up,
-            forward,
-            eye: camera.eye,
-            half_width,
-            half_height,
-            width: f64::from(viewport.width),
-            height: f64::from(viewport.height),
-            orthographic: matches!(camera.projection, Projection::Orthographic { .. }),
+            rays: ImageRays::new(camera, viewport),
             near: camera.near_limit(),
             far: camera.far,
             inclusive: false,
@@ -288,25 +270,21 @@ impl PrimaryRays {
     #[inline]
     #[must_use]
     pub fn window_x(&self, px: f64) -> f64 {
-        (2.0 * px / self.width - 1.0) * self.half_width
+        self.rays.window_x(px)
     }
 
     /// The window coordinate of image row `py` (`sy` of [`Camera::ray`]).
     #[inline]
     #[must_use]
     pub fn window_y(&self, py: f64) -> f64 {
-        (1.0 - 2.0 * py / self.height) * self.half_height
+        self.rays.window_y(py)
     }
 
     /// The ray through window point `(sx, sy)` (see [`PrimaryRays::window_x`]).
     #[inline]
     #[must_use]
     pub fn ray_at(&self, sx: f64, sy: f64) -> (DVec3, DVec3) {
-        if self.orthographic {
-            (self.eye + self.right * sx + self.up * sy, self.forward)
-        } else {
-            (self.eye, self.forward + self.right * sx + self.up * sy)
-        }
+        self.rays.ray_at(sx, sy)
     }
 
     /// The largest coordinate, in absolute value, of the rays' origins: the eye's for
@@ -315,9 +293,10 @@ impl PrimaryRays {
     /// `up` are unit vectors).
     #[must_use]
     pub fn origin_magnitude(&self) -> f64 {
-        let eye = self.eye.abs().max_element();
-        if self.orthographic {
-            eye + self.half_width.abs() + self.half_height.abs()
+        let r = &self.rays;
+        let eye = r.eye.abs().max_element();
+        if r.orthographic {
+            eye + r.half_width.abs() + r.half_height.abs()
         } else {
             eye
         }
@@ -326,13 +305,14 @@ impl PrimaryRays {
     /// The rule that decides rays exactly on an edge (see the module doc).
     #[must_use]
     pub fn tie_rule(&self) -> TieRule {
+        let r = &self.rays;
         TieRule {
             inclusive: self.inclusive,
-            orthographic: self.orthographic,
-            eye: self.eye,
-            forward: self.forward,
-            right: self.right,
-            up: self.up,
+            orthographic: r.orthographic,
+            eye: r.eye,
+            forward: r.forward,
+            right: r.right,
+            up: r.up,
         }
     }
 }
@@ -699,7 +679,7 @@ impl HitContext<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::demo::SplitMix64;
+    use crate::rng::SplitMix64;
 
     fn tie() -> TieRule {
         PrimaryRays::new(

@@ -35,12 +35,15 @@
 //! # Limitations
 //! The segment must be given in the space of the window: for perspective views use the
 //! homogeneous form before the divide by `w` (see [`super::projection_order`]).
+//!
+//! Paper: Cohen and Sutherland's outcode clipper, published in Newman and Sproull,
+//! "Principles of Interactive Computer Graphics", 2nd ed., McGraw-Hill, 1979.
 
 use super::InRange;
 use glam::{DVec2, DVec3, DVec4};
 
-use super::sutherland_hodgman::ClipPlane;
-use super::{OUT_BOTTOM, OUT_FAR, OUT_LEFT, OUT_NEAR, OUT_RIGHT, OUT_TOP, Rect};
+use super::view_volume::ClipPlane;
+use super::{OUT_BOTTOM, OUT_FAR, OUT_LEFT, OUT_NEAR, OUT_RIGHT, OUT_TOP, Rect, valid_box};
 use crate::geom::Aabb;
 
 /// 2D outcode bit 0: `y > ymax` (seed 001 eq. 6.5, `p0`).
@@ -243,12 +246,6 @@ pub fn outcode_box(p: DVec3, bounds: &Aabb) -> u8 {
         c = 0x3f;
     }
     c
-}
-
-/// Whether a box can clip: finite, and `min <= max` on every axis (a flat box is
-/// allowed, it clips to a plane).
-pub(crate) fn valid_box(bounds: &Aabb) -> bool {
-    bounds.min.in_range() && bounds.max.in_range() && !bounds.is_empty()
 }
 
 /// Cohen-Sutherland 3D against an axis-aligned box (the orthographic or parallel view

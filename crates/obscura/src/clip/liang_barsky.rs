@@ -32,12 +32,14 @@
 //!
 //! # Complexity
 //! `O(1)`: one division per boundary the segment is not parallel to, no iteration.
+//!
+//! Paper: Liang and Barsky, "A new concept and method for line clipping", ACM
+//! Transactions on Graphics 3(1), 1984.
 
 use super::InRange;
 use glam::{DVec2, DVec3, DVec4};
 
-use super::Rect;
-use super::cohen_sutherland::valid_box;
+use super::{Rect, valid_box};
 use crate::geom::Aabb;
 
 /// The `t` interval where every `t p_i <= q_i` holds, within `[0, 1]`.

@@ -29,6 +29,9 @@
 //! range (a coordinate that is not finite or beyond [`MAX_CLIP_COORDINATE`], where
 //! differences of two coordinates would overflow); the tests in `tests/clipping.rs`
 //! check that all of them agree. Windows and boxes beyond that range are refused too.
+//!
+//! Papers: each clipper's module cites its own; clipping before the divide is Blinn and
+//! Newell, "Clipping using homogeneous coordinates", SIGGRAPH 1978.
 
 pub mod cohen_sutherland;
 pub mod liang_barsky;
@@ -36,8 +39,12 @@ pub mod projection_order;
 pub mod region_codes;
 pub mod split;
 pub mod sutherland_hodgman;
+mod view_volume;
 pub mod window;
 
+pub use view_volume::{
+    OUT_BOTTOM, OUT_FAR, OUT_LEFT, OUT_NEAR, OUT_RIGHT, OUT_TOP, outcode_homogeneous,
+};
 pub use window::{ConvexWindow, EdgeLine, Rect, WindowError, polygon_area_2d};
 
 /// The largest magnitude of a coordinate the clippers accept: differences and sums of
@@ -68,43 +75,8 @@ macro_rules! in_range_for_vectors {
 
 in_range_for_vectors!(glam::DVec2, glam::DVec3, glam::DVec4);
 
-use glam::DVec4;
-
-/// Outcode bit: `x < -w` (left). The seed (000) writes the 6-digit code as
-/// `z>zmax, z<zmin, y>ymax, y<ymin, x>xmax, x<xmin` from the most significant digit down.
-pub const OUT_LEFT: u8 = 1 << 0;
-/// Outcode bit: `x > w` (right).
-pub const OUT_RIGHT: u8 = 1 << 1;
-/// Outcode bit: `y < -w` (bottom).
-pub const OUT_BOTTOM: u8 = 1 << 2;
-/// Outcode bit: `y > w` (top).
-pub const OUT_TOP: u8 = 1 << 3;
-/// Outcode bit: `z < -w` (near).
-pub const OUT_NEAR: u8 = 1 << 4;
-/// Outcode bit: `z > w` (far).
-pub const OUT_FAR: u8 = 1 << 5;
-
-/// The 6-bit region code of a clip-space point against `-w <= x, y, z <= w`; 0 inside.
-/// Two points with `c1 & c2 != 0` bound a segment entirely outside one plane.
-///
-/// ```
-/// use obscura::clip::{outcode_homogeneous, OUT_FAR, OUT_LEFT};
-/// use glam::DVec4;
-/// assert_eq!(outcode_homogeneous(DVec4::new(0., 0., 0., 1.)), 0);
-/// assert_eq!(outcode_homogeneous(DVec4::new(-2., 0., 3., 1.)), OUT_LEFT | OUT_FAR);
-/// ```
-#[inline]
-#[must_use]
-pub fn outcode_homogeneous(v: DVec4) -> u8 {
-    // Without branches (each bit is a compare and a select), so that a caller
-    // transforming points lane by lane keeps them in vector lanes.
-    let bit = |out: bool, code: u8| if out { code } else { 0 };
-    let c = bit(v.x < -v.w, OUT_LEFT)
-        | bit(v.x > v.w, OUT_RIGHT)
-        | bit(v.y < -v.w, OUT_BOTTOM)
-        | bit(v.y > v.w, OUT_TOP)
-        | bit(v.z < -v.w, OUT_NEAR)
-        | bit(v.z > v.w, OUT_FAR);
-    // NaN coordinates fail every comparison: count them as outside everything.
-    if v.is_nan() { 0x3f } else { c }
+/// Whether a box can clip: finite, and `min <= max` on every axis (a flat box is
+/// allowed, it clips to a plane).
+pub(crate) fn valid_box(bounds: &crate::geom::Aabb) -> bool {
+    bounds.min.in_range() && bounds.max.in_range() && !bounds.is_empty()
 }

@@ -30,6 +30,8 @@
 //!
 //! # Complexity
 //! `O(1)` per segment, `O(n)` per `n`-gon (six or four stages).
+//!
+//! Paper: Blinn and Newell, "Clipping using homogeneous coordinates", SIGGRAPH 1978.
 
 use super::InRange;
 use glam::{DVec2, DVec4};

@@ -44,6 +44,9 @@
 //! order, or `None`; non-finite input gives `None`. `O(n + k log k + k n)` for `k`
 //! crossing lines (each piece's midpoint is coded against all `n` lines); no
 //! allocation unless `k > 16`.
+//!
+//! Paper: Cyrus and Beck, "Generalized two- and three-dimensional clipping", Computers
+//! & Graphics 3(1), 1978 (clipping a segment by any convex region).
 
 use super::InRange;
 use std::fmt;

@@ -11,6 +11,10 @@
 //! on it: they go to both pieces, and a polygon with all vertices on the plane is
 //! coplanar, not split. Intersections are computed from the front endpoint towards the
 //! back one, so two polygons sharing an edge get bit-identical new vertices.
+//!
+//! Papers: Sutherland and Hodgman, "Reentrant polygon clipping", CACM 17(1), 1974 (the
+//! one stage extended here); Fuchs, Kedem and Naylor, "On visible surface generation by
+//! a priori tree structures", SIGGRAPH 1980 (splitting by a plane).
 
 use super::InRange;
 use glam::DVec3;
@@ -67,34 +71,18 @@ pub fn split_polygon(points: &[DVec3], plane: &Plane, eps: f64) -> Split {
     }
     // A negative or NaN tolerance would make a vertex both sides of the plane.
     let eps = if eps > 0.0 { eps } else { 0.0 };
-    let dist: Vec<f64> = points.iter().map(|&p| plane.evaluate(p) / len).collect();
-    let side = |d: f64| {
-        if d > eps {
-            PlaneSide::Front
-        } else if d < -eps {
-            PlaneSide::Back
-        } else {
-            PlaneSide::On
-        }
-    };
-    let (mut front, mut back) = (false, false);
-    for &d in &dist {
-        match side(d) {
-            PlaneSide::Front => front = true,
-            PlaneSide::Back => back = true,
-            _ => {}
-        }
-    }
-    match (front, back) {
-        (false, false) => {
+    let dist: Vec<f64> = points.iter().map(|&p| plane.signed_distance(p)).collect();
+    let side = |d: f64| PlaneSide::of_distance(d, eps);
+    match PlaneSide::of_distances(dist.iter().copied(), eps) {
+        PlaneSide::On => {
             let n = crate::geom::newell_normal(points);
             return Split::Coplanar {
                 same_direction: n.dot(plane.normal) >= 0.0,
             };
         }
-        (true, false) => return Split::Front,
-        (false, true) => return Split::Back,
-        (true, true) => {}
+        PlaneSide::Front => return Split::Front,
+        PlaneSide::Back => return Split::Back,
+        PlaneSide::Spanning => {}
     }
     let n = points.len();
     let (mut f, mut b) = (Vec::with_capacity(n + 1), Vec::with_capacity(n + 1));

@@ -39,12 +39,15 @@
 //! The input should be convex (the output of a concave polygon may have overlapping
 //! edges, as the algorithm is known to produce). Output vertex count is at most
 //! `n + 6` in 3D, `n + m` against an `m`-edge window.
+//!
+//! Paper: Sutherland and Hodgman, "Reentrant polygon clipping", Communications of the
+//! ACM 17(1), 1974.
 
 use super::InRange;
 use glam::{DVec2, DVec3, DVec4};
 
-use super::ConvexWindow;
-use super::cohen_sutherland::valid_box;
+pub use super::view_volume::ClipPlane;
+use super::{ConvexWindow, valid_box};
 use crate::geom::Aabb;
 
 /// A vertex that can be clipped: its clip-space position, and interpolation of
@@ -84,121 +87,6 @@ impl ClipVertex for ClipEyeVertex {
         ClipEyeVertex {
             clip: self.clip + (other.clip - self.clip) * t,
             eye: self.eye + (other.eye - self.eye) * t,
-        }
-    }
-}
-
-/// The six planes of the view volume in clip space.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ClipPlane {
-    /// `x >= -w`
-    Left,
-    /// `x <= w`
-    Right,
-    /// `y >= -w`
-    Bottom,
-    /// `y <= w`
-    Top,
-    /// `z >= -w`
-    Near,
-    /// `z <= w`
-    Far,
-}
-
-impl ClipPlane {
-    /// All six, in the order the stages run.
-    pub const ALL: [ClipPlane; 6] = [
-        ClipPlane::Near,
-        ClipPlane::Far,
-        ClipPlane::Left,
-        ClipPlane::Right,
-        ClipPlane::Bottom,
-        ClipPlane::Top,
-    ];
-
-    /// The plane equation at `v`: `>= 0` inside.
-    #[inline]
-    #[must_use]
-    pub fn distance(self, v: DVec4) -> f64 {
-        match self {
-            ClipPlane::Left => v.w + v.x,
-            ClipPlane::Right => v.w - v.x,
-            ClipPlane::Bottom => v.w + v.y,
-            ClipPlane::Top => v.w - v.y,
-            ClipPlane::Near => v.w + v.z,
-            ClipPlane::Far => v.w - v.z,
-        }
-    }
-
-    /// The plane of an outcode bit (`OUT_LEFT` ... `OUT_FAR`); `None` for anything
-    /// that is not exactly one of those six bits.
-    #[must_use]
-    pub fn from_outcode_bit(bit: u8) -> Option<ClipPlane> {
-        Some(match bit {
-            super::OUT_LEFT => ClipPlane::Left,
-            super::OUT_RIGHT => ClipPlane::Right,
-            super::OUT_BOTTOM => ClipPlane::Bottom,
-            super::OUT_TOP => ClipPlane::Top,
-            super::OUT_NEAR => ClipPlane::Near,
-            super::OUT_FAR => ClipPlane::Far,
-            _ => return None,
-        })
-    }
-
-    /// Where the line `p1 + t (p2 - p1)` meets this plane: seed 000's t-formulae (3),
-    /// written exactly as there, e.g. left `t = (x1 + w1) / ((x1 - x2) + (w1 - w2))`,
-    /// right `t = (x1 - w1) / ((x1 - x2) + (w2 - w1))`. Not finite when the segment
-    /// is parallel to the plane; callers split only segments whose endpoints are on
-    /// either side.
-    ///
-    /// ```
-    /// use obscura::clip::sutherland_hodgman::ClipPlane;
-    /// use glam::DVec4;
-    /// let (p1, p2) = (DVec4::new(0., 0., 0., 1.), DVec4::new(3., 0., 0., 1.));
-    /// // right: (0 - 1) / ((0 - 3) + (1 - 1)) = 1/3
-    /// assert_eq!(ClipPlane::Right.intersection_t(p1, p2), 1.0 / 3.0);
-    /// ```
-    #[inline]
-    #[must_use]
-    pub fn intersection_t(self, p1: DVec4, p2: DVec4) -> f64 {
-        let (w1, w2) = (p1.w, p2.w);
-        match self {
-            ClipPlane::Left => (p1.x + w1) / ((p1.x - p2.x) + (w1 - w2)),
-            ClipPlane::Right => (p1.x - w1) / ((p1.x - p2.x) + (w2 - w1)),
-            ClipPlane::Bottom => (p1.y + w1) / ((p1.y - p2.y) + (w1 - w2)),
-            ClipPlane::Top => (p1.y - w1) / ((p1.y - p2.y) + (w2 - w1)),
-            ClipPlane::Near => (p1.z + w1) / ((p1.z - p2.z) + (w1 - w2)),
-            ClipPlane::Far => (p1.z - w1) / ((p1.z - p2.z) + (w2 - w1)),
-        }
-    }
-
-    /// `v` with the coordinate of this plane set so that it lies exactly on it
-    /// (`x = -w` for left, `x = w` for right, ...): an intersection computed in
-    /// floating point may land a few ulps off the plane.
-    #[inline]
-    #[must_use]
-    pub fn snap_onto(self, mut v: DVec4) -> DVec4 {
-        match self {
-            ClipPlane::Left => v.x = -v.w,
-            ClipPlane::Right => v.x = v.w,
-            ClipPlane::Bottom => v.y = -v.w,
-            ClipPlane::Top => v.y = v.w,
-            ClipPlane::Near => v.z = -v.w,
-            ClipPlane::Far => v.z = v.w,
-        }
-        v
-    }
-
-    /// The outcode bit of this plane.
-    #[must_use]
-    pub fn outcode_bit(self) -> u8 {
-        match self {
-            ClipPlane::Left => super::OUT_LEFT,
-            ClipPlane::Right => super::OUT_RIGHT,
-            ClipPlane::Bottom => super::OUT_BOTTOM,
-            ClipPlane::Top => super::OUT_TOP,
-            ClipPlane::Near => super::OUT_NEAR,
-            ClipPlane::Far => super::OUT_FAR,
         }
     }
 }

@@ -25,6 +25,10 @@
 //! construction). Either winding is accepted. Anything else is refused with a
 //! [`WindowError`]: the seed's half-plane-0 is defined by "the side the other vertices
 //! are on", which does not exist for a non-convex or degenerate polygon.
+//!
+//! Paper: Cyrus and Beck, "Generalized two- and three-dimensional clipping", Computers
+//! & Graphics 3(1), 1978 (a convex window as the intersection of its edges' half-
+//! planes).
 
 use super::InRange;
 use glam::DVec2;

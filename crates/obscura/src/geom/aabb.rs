@@ -1,6 +1,11 @@
 //! Axis-aligned bounding boxes.
+//!
+//! Paper: Rubin and Whitted, "A 3-dimensional representation for fast rendering of
+//! complex scenes", SIGGRAPH 1980 (hierarchies of bounding boxes).
 
 use glam::{DMat4, DVec3};
+
+use super::slab::{RaySlabs, slab};
 
 /// An axis-aligned box `[min, max]`. The empty box has `min > max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,6 +130,42 @@ impl Aabb {
     pub fn overlaps(&self, o: &Aabb) -> bool {
         self.min.cmple(o.max).all() && o.min.cmple(self.max).all()
     }
+
+    /// The parameter interval `[t0, t1]` in which the ray `origin + direction t` is
+    /// inside the box (one slab per axis, see `geom::slab`), `None` if it misses. Not
+    /// clipped to `t >= 0`. The box must not be empty (each slab is read as the
+    /// interval between its two bounds).
+    #[must_use]
+    pub fn ray_interval(&self, origin: DVec3, direction: DVec3) -> Option<(f64, f64)> {
+        let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+        for k in 0..3 {
+            if !slab(
+                origin[k],
+                direction[k],
+                self.min[k],
+                self.max[k],
+                &mut t0,
+                &mut t1,
+            ) {
+                return None;
+            }
+        }
+        Some((t0, t1))
+    }
+
+    /// [`Aabb::ray_interval`] with the ray's projections computed beforehand (the
+    /// first three directions of a [`RaySlabs`] are the axes); the same interval, bit
+    /// for bit.
+    #[must_use]
+    pub fn ray_interval_projected(&self, ray: &RaySlabs) -> Option<(f64, f64)> {
+        let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
+        for k in 0..3 {
+            if !ray.clip(k, self.min[k], self.max[k], &mut t0, &mut t1) {
+                return None;
+            }
+        }
+        Some((t0, t1))
+    }
 }
 
 #[cfg(test)]
@@ -143,5 +184,26 @@ mod tests {
         assert!(!b.contains(DVec3::new(0., 1., 6.)));
         let t = b.transformed(&DMat4::from_translation(DVec3::X));
         assert_eq!(t.min.x, 0.0);
+    }
+
+    #[test]
+    fn ray_intervals_through_the_box() {
+        let b = Aabb {
+            min: DVec3::new(1.0, -1.0, -1.0),
+            max: DVec3::new(3.0, 1.0, 1.0),
+        };
+        // Along +x through the middle: enters at x = 1, leaves at x = 3.
+        let o = DVec3::ZERO;
+        assert_eq!(b.ray_interval(o, DVec3::X), Some((1.0, 3.0)));
+        assert_eq!(b.ray_interval(o, DVec3::X * 2.0), Some((0.5, 1.5)));
+        // Behind the origin: a negative interval (not clipped to t >= 0).
+        assert_eq!(b.ray_interval(o, -DVec3::X), Some((-3.0, -1.0)));
+        // Parallel to the y and z slabs but outside one of them: a miss.
+        assert_eq!(b.ray_interval(DVec3::new(0.0, 2.0, 0.0), DVec3::X), None);
+        // A diagonal: the latest entry and the earliest exit over the three slabs.
+        let d = DVec3::new(1.0, 0.5, 0.25);
+        assert_eq!(b.ray_interval(o, d), Some((1.0, 2.0)));
+        let ray = RaySlabs::new(o, d);
+        assert_eq!(b.ray_interval_projected(&ray), b.ray_interval(o, d));
     }
 }

@@ -24,27 +24,14 @@
 //! - Limitations: the directions are fixed in world space, so a thin object at an
 //!   angle none of them matches keeps some empty space (an OBB adapts, a k-DOP does
 //!   not).
+//!
+//! Paper: Klosowski, Held, Mitchell, Sowizral and Zikan, "Efficient collision detection
+//! using bounding volume hierarchies of k-DOPs", IEEE TVCG 4(1), 1998.
 
 use glam::DVec3;
 
-use super::obb::slab;
-
-/// The 13 directions of the 26-DOP: axes, cube diagonals, edge diagonals.
-pub const KDOP_AXES: [DVec3; 13] = [
-    DVec3::new(1.0, 0.0, 0.0),
-    DVec3::new(0.0, 1.0, 0.0),
-    DVec3::new(0.0, 0.0, 1.0),
-    DVec3::new(1.0, 1.0, 1.0),
-    DVec3::new(1.0, 1.0, -1.0),
-    DVec3::new(1.0, -1.0, 1.0),
-    DVec3::new(1.0, -1.0, -1.0),
-    DVec3::new(1.0, 1.0, 0.0),
-    DVec3::new(1.0, -1.0, 0.0),
-    DVec3::new(1.0, 0.0, 1.0),
-    DVec3::new(1.0, 0.0, -1.0),
-    DVec3::new(0.0, 1.0, 1.0),
-    DVec3::new(0.0, 1.0, -1.0),
-];
+use super::slab::slab;
+pub use super::slab::{KDOP_AXES, RaySlabs};
 
 /// Which directions a k-DOP uses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -153,50 +140,6 @@ impl Kdop {
     }
 }
 
-/// A ray's projections on the 13 directions of [`KDOP_AXES`], computed once to test it
-/// against many k-DOPs (and axis-aligned boxes, the first three directions).
-#[derive(Clone, Copy, Debug)]
-pub struct RaySlabs {
-    /// `n · origin` per direction.
-    origin: [f64; 13],
-    /// `1 / (n · direction)` per direction (infinite when the ray is parallel to the
-    /// slab).
-    inv: [f64; 13],
-    /// `n · direction` per direction.
-    along: [f64; 13],
-}
-
-impl RaySlabs {
-    /// Projects the ray `origin + t direction`.
-    #[must_use]
-    pub fn new(origin: DVec3, direction: DVec3) -> Self {
-        let along = KDOP_AXES.map(|n| n.dot(direction));
-        RaySlabs {
-            origin: KDOP_AXES.map(|n| n.dot(origin)),
-            inv: along.map(|a| 1.0 / a),
-            along,
-        }
-    }
-
-    /// Narrows `[t0, t1]` to where the ray is inside slab `i` (`lo <= n_i · x <= hi`);
-    /// false when it becomes empty. The same arithmetic as the unprojected test.
-    #[inline]
-    pub fn clip(&self, i: usize, lo: f64, hi: f64, t0: &mut f64, t1: &mut f64) -> bool {
-        let so = self.origin[i];
-        if self.along[i] == 0.0 {
-            return so >= lo && so <= hi;
-        }
-        let inv = self.inv[i];
-        let (mut a, mut b) = ((lo - so) * inv, (hi - so) * inv);
-        if a > b {
-            std::mem::swap(&mut a, &mut b);
-        }
-        *t0 = t0.max(a);
-        *t1 = t1.min(b);
-        *t0 <= *t1
-    }
-}
-
 impl Kdop {
     /// [`Kdop::ray_interval`] with the ray's projections computed beforehand.
     #[must_use]
@@ -215,7 +158,7 @@ impl Kdop {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::demo::SplitMix64;
+    use crate::rng::SplitMix64;
 
     fn random_points(rng: &mut SplitMix64, n: usize) -> Vec<DVec3> {
         (0..n)

@@ -3,6 +3,9 @@
 //! Everything here works in `f64`: these are the computations that decide topology
 //! (which side of a plane, which polygon is in front), so they must not flip under
 //! rounding. Epsilons are documented where they are used.
+//!
+//! Papers: each module cites its own (Newell's normal, Ritter 1990, Gottschalk et al.
+//! 1996, Klosowski et al. 1998, Kay and Kajiya 1986, Meisters 1975).
 
 use glam::DVec3;
 
@@ -11,19 +14,19 @@ pub mod kdop;
 pub mod obb;
 mod plane;
 mod polygon;
+pub(crate) mod slab;
 mod sphere;
+mod triangulate;
 
 pub use aabb::Aabb;
 pub use kdop::{Kdop, KdopKind, RaySlabs};
 pub use obb::Obb;
 pub use plane::{Plane, PlaneSide};
-#[cfg(test)]
-pub(crate) use polygon::triangulate_within;
-pub use polygon::{
-    Triangulation, is_convex, max_plane_deviation, newell_normal, polygon_area, polygon_centroid,
-    triangulate, triangulate_reporting,
-};
+pub use polygon::{is_convex, max_plane_deviation, newell_normal, polygon_area, polygon_centroid};
 pub use sphere::Sphere;
+#[cfg(test)]
+pub(crate) use triangulate::triangulate_within;
+pub use triangulate::{Triangulation, triangulate, triangulate_reporting};
 
 /// A kind of bounding volume (for ray casting with per-object bounds, and culling).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

@@ -27,8 +27,13 @@
 //! - Complexity: O(n) (a constant number of passes over the points).
 //! - Limitations: not the minimum-volume box; PCA is biased by vertex density, which
 //!   the world-axes candidate and the descent partly correct.
+//!
+//! Paper: Gottschalk, Lin and Manocha, "OBBTree: a hierarchical structure for rapid
+//! interference detection", SIGGRAPH 1996.
 
 use glam::{DMat3, DVec3};
+
+use super::slab::{KDOP_AXES, slab};
 
 /// An oriented box `{x : lo_i <= axes[i] · x <= hi_i}` with orthonormal axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -169,22 +174,6 @@ impl Obb {
     }
 }
 
-/// Narrows `[t0, t1]` to where `lo <= so + t sd <= hi`; false when it becomes empty.
-#[inline]
-pub(crate) fn slab(so: f64, sd: f64, lo: f64, hi: f64, t0: &mut f64, t1: &mut f64) -> bool {
-    if sd == 0.0 {
-        return so >= lo && so <= hi;
-    }
-    let inv = 1.0 / sd;
-    let (mut a, mut b) = ((lo - so) * inv, (hi - so) * inv);
-    if a > b {
-        std::mem::swap(&mut a, &mut b);
-    }
-    *t0 = t0.max(a);
-    *t1 = t1.min(b);
-    *t0 <= *t1
-}
-
 fn project(axes: &[DVec3; 3], p: DVec3) -> DVec3 {
     DVec3::new(axes[0].dot(p), axes[1].dot(p), axes[2].dot(p))
 }
@@ -203,7 +192,7 @@ fn orthonormalize(a: [DVec3; 3]) -> [DVec3; 3] {
 /// 1024 points: enough to compare candidate orientations.
 fn sample_points(points: &[DVec3]) -> Vec<DVec3> {
     let mut out = Vec::with_capacity(1024 + 26);
-    for axis in super::kdop::KDOP_AXES {
+    for axis in KDOP_AXES {
         let (mut lo, mut hi) = (points[0], points[0]);
         let (mut lo_d, mut hi_d) = (axis.dot(lo), axis.dot(hi));
         for &p in points {
@@ -294,7 +283,7 @@ fn jacobi_eigen(mut a: [[f64; 3]; 3]) -> ([f64; 3], [DVec3; 3]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::demo::SplitMix64;
+    use crate::rng::SplitMix64;
 
     #[test]
     fn jacobi_diagonalizes_a_known_matrix() {

@@ -3,6 +3,10 @@
 //! Source: seed 004 ("Визначення рівняння площини ... методом Н'юела"), which writes
 //! the plane of the z-buffer task's triangle as `3x + y + 4z - 120 = 0` by solving
 //! `(a/d, b/d, c/d) · M = (-1, -1, -1)` with Cramer's rule.
+//!
+//! Paper: Newell's method as given in Sutherland, Sproull and Schumacher, "A
+//! characterization of ten hidden-surface algorithms", ACM Computing Surveys 6(1),
+//! 1974.
 
 use glam::DVec3;
 
@@ -27,6 +31,45 @@ pub enum PlaneSide {
     On,
     /// Polygons only: vertices on both sides.
     Spanning,
+}
+
+impl PlaneSide {
+    /// The side of a point at signed distance `d` ([`Plane::signed_distance`]), with
+    /// `|d| <= eps` counted as on the plane (a NaN distance too). This and
+    /// [`Plane::classify_points`] are the one rule of which side a point and a polygon
+    /// lie on: clipping by a plane, the BSP tree and depth sort all decide with them.
+    #[inline]
+    #[must_use]
+    pub fn of_distance(d: f64, eps: f64) -> PlaneSide {
+        if d > eps {
+            PlaneSide::Front
+        } else if d < -eps {
+            PlaneSide::Back
+        } else {
+            PlaneSide::On
+        }
+    }
+
+    /// The side of a set of points from their signed distances: `Spanning` if some are
+    /// strictly in front and some strictly behind (beyond `eps`), `On` if none is
+    /// beyond `eps`.
+    #[must_use]
+    pub fn of_distances(distances: impl IntoIterator<Item = f64>, eps: f64) -> PlaneSide {
+        let (mut front, mut back) = (false, false);
+        for d in distances {
+            match PlaneSide::of_distance(d, eps) {
+                PlaneSide::Front => front = true,
+                PlaneSide::Back => back = true,
+                _ => {}
+            }
+        }
+        match (front, back) {
+            (true, true) => PlaneSide::Spanning,
+            (true, false) => PlaneSide::Front,
+            (false, true) => PlaneSide::Back,
+            (false, false) => PlaneSide::On,
+        }
+    }
 }
 
 impl Plane {
@@ -153,7 +196,11 @@ impl Plane {
         self.normal.dot(p) + self.d
     }
 
-    /// The signed Euclidean distance of `p` (the normal need not be unit length).
+    /// The signed Euclidean distance of `p` (the normal need not be unit length):
+    /// `evaluate(p) / |normal|`. Every "which side of this plane" decision of the crate
+    /// goes through it ([`PlaneSide::of_distance`]), so that a classification and the
+    /// split that follows it agree on every vertex.
+    #[inline]
     #[must_use]
     pub fn signed_distance(&self, p: DVec3) -> f64 {
         self.evaluate(p) / self.normal.length()
@@ -181,34 +228,21 @@ impl Plane {
     /// Which side `p` is on, with `|signed distance| <= eps` counted as on the plane.
     #[must_use]
     pub fn side_of(&self, p: DVec3, eps: f64) -> PlaneSide {
-        let s = self.signed_distance(p);
-        if s > eps {
-            PlaneSide::Front
-        } else if s < -eps {
-            PlaneSide::Back
-        } else {
-            PlaneSide::On
-        }
+        PlaneSide::of_distance(self.signed_distance(p), eps)
     }
 
     /// Which side a polygon is on: `Spanning` if it has vertices strictly on both
     /// sides, `On` if every vertex is within `eps`.
     #[must_use]
     pub fn classify_polygon(&self, points: &[DVec3], eps: f64) -> PlaneSide {
-        let (mut front, mut back) = (false, false);
-        for &p in points {
-            match self.side_of(p, eps) {
-                PlaneSide::Front => front = true,
-                PlaneSide::Back => back = true,
-                _ => {}
-            }
-        }
-        match (front, back) {
-            (true, true) => PlaneSide::Spanning,
-            (true, false) => PlaneSide::Front,
-            (false, true) => PlaneSide::Back,
-            (false, false) => PlaneSide::On,
-        }
+        self.classify_points(points.iter().copied(), eps)
+    }
+
+    /// [`Plane::classify_polygon`] for points given one by one (vertices read through
+    /// an index list, say).
+    #[must_use]
+    pub fn classify_points(&self, points: impl IntoIterator<Item = DVec3>, eps: f64) -> PlaneSide {
+        PlaneSide::of_distances(points.into_iter().map(|p| self.signed_distance(p)), eps)
     }
 
     /// Where the segment `a`-`b` meets the plane, as the parameter `t` of `a + t(b-a)`;
@@ -324,5 +358,46 @@ mod tests {
         assert_eq!(p.classify_polygon(&tri, 1e-9), PlaneSide::Spanning);
         assert_eq!(p.intersect_segment(tri[0], tri[1]), Some(0.5));
         assert_eq!(p.side_of(DVec3::new(0., 0., 1e-12), 1e-9), PlaneSide::On);
+    }
+
+    #[test]
+    fn one_side_rule_for_points_and_polygons() {
+        // Beyond eps on either side; within it (both ends included) and NaN: on.
+        assert_eq!(PlaneSide::of_distance(0.25, 0.125), PlaneSide::Front);
+        assert_eq!(PlaneSide::of_distance(-0.25, 0.125), PlaneSide::Back);
+        assert_eq!(PlaneSide::of_distance(0.125, 0.125), PlaneSide::On);
+        assert_eq!(PlaneSide::of_distance(-0.125, 0.125), PlaneSide::On);
+        assert_eq!(PlaneSide::of_distance(f64::NAN, 0.125), PlaneSide::On);
+        assert_eq!(PlaneSide::of_distances([], 0.0), PlaneSide::On);
+        assert_eq!(
+            PlaneSide::of_distances([0.0, 1.0, 0.0], 0.5),
+            PlaneSide::Front
+        );
+        assert_eq!(PlaneSide::of_distances([-1.0, 0.25], 0.5), PlaneSide::Back);
+        assert_eq!(
+            PlaneSide::of_distances([-1.0, 1.0], 0.5),
+            PlaneSide::Spanning
+        );
+        // A plane with a normal of length 2: distances are Euclidean (z = 3 is 1 above
+        // z = 2), so eps is a distance whatever the normal's length.
+        let p = Plane {
+            normal: DVec3::new(0.0, 0.0, 2.0),
+            d: -4.0,
+        };
+        assert_eq!(p.signed_distance(DVec3::new(5.0, -1.0, 3.0)), 1.0);
+        assert_eq!(p.side_of(DVec3::new(0.0, 0.0, 2.75), 0.5), PlaneSide::Front);
+        assert_eq!(p.side_of(DVec3::new(0.0, 0.0, 2.75), 0.75), PlaneSide::On);
+        assert_eq!(p.side_of(DVec3::new(0.0, 0.0, 1.0), 0.5), PlaneSide::Back);
+        let tri = [
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(1.0, 0.0, 2.0),
+            DVec3::new(0.0, 1.0, 2.0),
+        ];
+        assert_eq!(p.classify_polygon(&tri, 0.5), PlaneSide::Back);
+        assert_eq!(p.classify_points(tri.iter().copied(), 1.0), PlaneSide::On);
+        assert_eq!(
+            p.classify_points(tri.iter().map(|&q| q + DVec3::Z * 0.5), 0.25),
+            PlaneSide::Spanning
+        );
     }
 }

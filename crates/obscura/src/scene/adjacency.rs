@@ -251,7 +251,7 @@ mod tests {
 
     #[test]
     fn radix_sort_sorts() {
-        let mut rng = crate::scene::demo::SplitMix64(3);
+        let mut rng = crate::rng::SplitMix64(3);
         for bits in [1u32, 7, 8, 9, 37, 64] {
             let mask = if bits == 64 {
                 u64::MAX

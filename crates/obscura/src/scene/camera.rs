@@ -55,6 +55,68 @@ pub struct Ray {
     pub direction: DVec3,
 }
 
+/// The rays of one camera through the points of one viewport's image, with the
+/// camera's basis and window computed once: the one place a camera ray is computed
+/// ([`Camera::ray`] and the ray casters' [`PrimaryRays`](crate::accel::triangles::PrimaryRays)
+/// both call it, so their rays are the same bit for bit).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ImageRays {
+    pub(crate) right: DVec3,
+    pub(crate) up: DVec3,
+    pub(crate) forward: DVec3,
+    pub(crate) eye: DVec3,
+    pub(crate) half_width: f64,
+    pub(crate) half_height: f64,
+    width: f64,
+    height: f64,
+    pub(crate) orthographic: bool,
+}
+
+impl ImageRays {
+    /// The rays of `camera` for `viewport`.
+    pub(crate) fn new(camera: &Camera, viewport: Viewport) -> Self {
+        let (right, up, forward) = camera.basis();
+        let (half_width, half_height) = camera.half_extents(viewport.aspect());
+        ImageRays {
+            right,
+            up,
+            forward,
+            eye: camera.eye,
+            half_width,
+            half_height,
+            width: f64::from(viewport.width),
+            height: f64::from(viewport.height),
+            orthographic: matches!(camera.projection, Projection::Orthographic { .. }),
+        }
+    }
+
+    /// The window coordinate of image column `px`: `-half_width` at the left edge,
+    /// `half_width` at the right.
+    #[inline]
+    pub(crate) fn window_x(&self, px: f64) -> f64 {
+        (2.0 * px / self.width - 1.0) * self.half_width
+    }
+
+    /// The window coordinate of image row `py`: `half_height` at the top (row 0),
+    /// `-half_height` at the bottom.
+    #[inline]
+    pub(crate) fn window_y(&self, py: f64) -> f64 {
+        (1.0 - 2.0 * py / self.height) * self.half_height
+    }
+
+    /// The ray `(origin, direction)` through window point `(sx, sy)`: from the eye
+    /// through the window at unit depth (perspective), or from the window point on the
+    /// eye plane along the view axis (orthographic).
+    #[inline]
+    pub(crate) fn ray_at(&self, sx: f64, sy: f64) -> (DVec3, DVec3) {
+        if self.orthographic {
+            (self.eye + self.right * sx + self.up * sy, self.forward)
+        } else {
+            (self.eye, self.forward + self.right * sx + self.up * sy)
+        }
+    }
+}
+
 impl Camera {
     /// The smallest eye-space depth every algorithm keeps: `near` less `2^-40` of it.
     /// A polygon lying on the near plane has depths within a few units in the last
@@ -339,20 +401,9 @@ impl Camera {
     /// the top; the centre of pixel `(i, j)` is `(i + 0.5, j + 0.5)`).
     #[must_use]
     pub fn ray(&self, viewport: Viewport, px: f64, py: f64) -> Ray {
-        let (r, u, f) = self.basis();
-        let (hw, hh) = self.half_extents(viewport.aspect());
-        let sx = (2.0 * px / f64::from(viewport.width) - 1.0) * hw;
-        let sy = (1.0 - 2.0 * py / f64::from(viewport.height)) * hh;
-        match self.projection {
-            Projection::Perspective { .. } => Ray {
-                origin: self.eye,
-                direction: f + r * sx + u * sy,
-            },
-            Projection::Orthographic { .. } => Ray {
-                origin: self.eye + r * sx + u * sy,
-                direction: f,
-            },
-        }
+        let rays = ImageRays::new(self, viewport);
+        let (origin, direction) = rays.ray_at(rays.window_x(px), rays.window_y(py));
+        Ray { origin, direction }
     }
 
     /// A camera that shows the whole box: looking at its centre from the direction

@@ -19,6 +19,11 @@ use glam::{DMat4, DVec3};
 use super::{Camera, Mesh, MeshBuilder, ObjectDesc, Scene};
 use crate::{Error, Result};
 
+/// Kept at its old path while other branches still name it here; the generator lives
+/// in [`crate::rng`].
+#[doc(hidden)]
+pub use crate::rng::SplitMix64;
+
 /// The names `demo:NAME` accepts.
 pub const NAMES: [&str; 6] = [
     "default",
@@ -263,32 +268,6 @@ pub fn sphere(segments: u32, rings: u32) -> Scene {
         10.0,
     )));
     s
-}
-
-/// A deterministic pseudo-random sequence (SplitMix64), so generated scenes are the
-/// same everywhere without a dependency.
-#[derive(Clone, Debug)]
-pub struct SplitMix64(pub u64);
-
-impl SplitMix64 {
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// A uniform number in `[0, 1)`.
-    pub fn next_f64(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// A uniform number in `[lo, hi)`.
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next_f64()
-    }
 }
 
 /// A city of `nx * nz` boxes of random heights on a ground plane, one object for the

@@ -20,6 +20,7 @@ use std::sync::Arc;
 use glam::{DMat4, DVec3};
 
 pub use adjacency::{EdgeAdjacency, MeshEdge, is_convex_closed};
+pub(crate) use camera::ImageRays;
 pub use camera::{Camera, Projection, Ray, Viewport};
 
 /// The largest magnitude of a world coordinate (and of a camera's position and planes)

@@ -14,8 +14,8 @@ use std::f64::consts::TAU;
 
 use glam::{DMat4, DVec3};
 
-use super::demo::SplitMix64;
 use super::{Camera, Mesh, MeshBuilder, ObjectDesc, Scene};
+use crate::rng::SplitMix64;
 
 fn soup(tris: &[[DVec3; 3]]) -> Mesh {
     let mut b = MeshBuilder::with_capacity(tris.len() * 3, tris.len());

@@ -38,6 +38,11 @@
 //! - Limitations: exact depth ties between polygons that are not coplanar within the
 //!   tolerance (e.g. interpenetration lines) may differ from the z-buffer's `f32`
 //!   decisions by a pixel; subtrees with a corner behind the eye are never skipped.
+//!
+//! Papers: Schumacher, Brand, Gilliland and Sharp, AFHRL-TR-69-14, 1969 (priority by
+//! separating planes); Fuchs, Kedem and Naylor, "On visible surface generation by a
+//! priori tree structures", SIGGRAPH 1980; Gordon and Chen, "Front-to-back display of
+//! BSP trees", IEEE CG&A 11(5), 1991 (the front-to-back variant).
 
 use std::ops::ControlFlow;
 use std::time::Instant;

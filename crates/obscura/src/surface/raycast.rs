@@ -232,35 +232,12 @@ impl ObjectBound {
     /// k-DOP directions (the first three are the axes), computed once per ray.
     fn interval(&self, o: DVec3, d: DVec3, slabs: &RaySlabs) -> Option<(f64, f64)> {
         match self {
-            ObjectBound::Sphere(s) => ray_sphere(s, o, d),
-            ObjectBound::Aabb(b) => {
-                let (mut t0, mut t1) = (f64::NEG_INFINITY, f64::INFINITY);
-                for k in 0..3 {
-                    if !slabs.clip(k, b.min[k], b.max[k], &mut t0, &mut t1) {
-                        return None;
-                    }
-                }
-                Some((t0, t1))
-            }
+            ObjectBound::Sphere(s) => s.ray_interval(o, d),
+            ObjectBound::Aabb(b) => b.ray_interval_projected(slabs),
             ObjectBound::Obb(b) => b.ray_interval(o, d),
             ObjectBound::Kdop(k) => k.ray_interval_projected(slabs),
         }
     }
-}
-
-/// The interval where the ray is inside the sphere: the distance from the centre to the
-/// ray compared with the radius (seed 002, "distanza di un punto da una retta").
-fn ray_sphere(s: &Sphere, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
-    let dd = d.length_squared();
-    let oc = o - s.center;
-    let t_mid = -oc.dot(d) / dd;
-    let closest = oc + d * t_mid;
-    let gap = s.radius * s.radius - closest.length_squared();
-    if !(gap >= 0.0) {
-        return None;
-    }
-    let half = (gap / dd).sqrt();
-    Some((t_mid - half, t_mid + half))
 }
 
 /// Per-object bounding volumes tested first (seed 000 "Περιβάλλοντες Όγκοι (1)-(4)",
@@ -728,25 +705,4 @@ fn ms_since(t: Instant) -> f64 {
 
 fn per(a: u64, b: u64) -> f64 {
     if b == 0 { 0.0 } else { a as f64 / b as f64 }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ray_sphere_interval_is_analytic() {
-        let s = Sphere {
-            center: DVec3::new(0.0, 0.0, -5.0),
-            radius: 2.0,
-        };
-        let (t0, t1) = ray_sphere(&s, DVec3::ZERO, -DVec3::Z * 2.0).unwrap();
-        assert!((t0 - 1.5).abs() < 1e-15 && (t1 - 3.5).abs() < 1e-15);
-        // Passing at distance 1 from the centre: chord half-length sqrt(3).
-        let (t0, t1) = ray_sphere(&s, DVec3::new(1.0, 0.0, 0.0), -DVec3::Z).unwrap();
-        assert!(
-            (t0 - (5.0 - 3f64.sqrt())).abs() < 1e-12 && (t1 - (5.0 + 3f64.sqrt())).abs() < 1e-12
-        );
-        assert!(ray_sphere(&s, DVec3::new(2.5, 0.0, 0.0), -DVec3::Z).is_none());
-    }
 }

@@ -3,7 +3,8 @@
 #![allow(dead_code)]
 
 use glam::{DMat4, DVec3};
-use obscura::scene::demo::{self, SplitMix64};
+use obscura::rng::SplitMix64;
+use obscura::scene::demo;
 use obscura::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport};
 use obscura::surface::{Algorithm, RenderOptions, render};
 use obscura::{Frame, PrepareOptions, PreparedView, Stats, prepare};

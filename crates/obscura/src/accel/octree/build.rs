@@ -838,7 +838,7 @@ mod tests {
 
     #[test]
     fn separating_axes_agree_with_clipping_on_random_triangles() {
-        let mut rng = demo::SplitMix64(11);
+        let mut rng = crate::rng::SplitMix64(11);
         let (min, max) = (DVec3::splat(-0.5), DVec3::splat(0.5));
         let (mut hits, mut misses) = (0, 0);
         for _ in 0..20_000 {

@@ -9,6 +9,10 @@
 //! seed's case IV, "the faces intersect") are split first; when no face has
 //! `A[i] = 0` the covering relation has a cycle, found by walking it, and a face of
 //! the cycle is split by the plane of another.
+//!
+//! Papers: Newell, Newell and Sancha, "A solution to the hidden surface problem", ACM
+//! 1972 (the priority order); Kahn, "Topological sorting of large networks", CACM
+//! 5(11), 1962 (the order from the counts).
 
 use std::cmp::Ordering;
 

@@ -8,6 +8,9 @@
 //! to move again closes a cycle: the stack from the head down to it is the cycle, and
 //! one of its polygons is split by the plane of another. After a split the stack
 //! goes back to the heap and the marks are cleared.
+//!
+//! Paper: Newell, Newell and Sancha, "A solution to the hidden surface problem",
+//! Proceedings of the ACM Annual Conference, 1972.
 
 use std::cmp::{Ordering, Reverse};
 use std::collections::{BinaryHeap, HashMap};

@@ -1,5 +1,8 @@
 //! The polygons depth sort works on: the view's polygons and the pieces made by
 //! splitting them, with their eye-space planes, extents and the pairwise tests.
+//!
+//! Paper: Newell, Newell and Sancha, "A solution to the hidden surface problem",
+//! Proceedings of the ACM Annual Conference, 1972 (the tests and splits).
 
 use glam::DVec3;
 
@@ -251,14 +254,13 @@ impl WorkSet {
     }
 
     fn range(&self, i: u32, plane: &Plane) -> Range {
-        let len = plane.normal.length();
         let mut r = Range {
             min: f64::INFINITY,
             max: f64::NEG_INFINITY,
         };
         for v in self.vertices(i) {
-            // The expression `split_polygon` uses, so tests and splits agree.
-            let d = plane.evaluate(v.eye) / len;
+            // The distance `split_polygon` splits by, so tests and splits agree.
+            let d = plane.signed_distance(v.eye);
             r.min = r.min.min(d);
             r.max = r.max.max(d);
         }
