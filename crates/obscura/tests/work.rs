@@ -192,6 +192,7 @@ fn the_loops_of_every_algorithm_check_the_stop_flag() {
     )
     .unwrap();
     let o = stopped();
+    assert_stopped("z-buffer", surface::zbuffer::render(&view, &o));
     assert_stopped("scanline", surface::scanline::render(&view, &o));
     assert_stopped("depth sort", surface::depth_sort::render(&view, &o));
     assert_stopped(

@@ -72,6 +72,7 @@ pub(super) fn draw_banded(
     kernel: Kernel,
     threads: usize,
     frame: &mut Frame,
+    deadline: &crate::work::Deadline,
 ) -> Counts {
     let (width, height) = (frame.width, frame.height);
     let bands = height.div_ceil(BAND_ROWS) as usize;
@@ -82,6 +83,10 @@ pub(super) fn draw_banded(
         (0..n).step_by(per).map(|s| s..(s + per).min(n)).collect();
     let rows = BAND_ROWS as usize * width as usize;
     let draw = |b: usize, keys: &mut [f32], ids: &mut [u32], lists: &[Vec<Vec<u32>>]| {
+        // Past the deadline the bands left are skipped; the caller returns its error.
+        if deadline.is_over() {
+            return Counts::default();
+        }
         let mut band = Band {
             keys,
             ids,

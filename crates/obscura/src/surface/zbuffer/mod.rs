@@ -120,10 +120,19 @@ fn render_scheduled(
     check_budget(view, options, bands)?;
     let mut frame = Frame::zeroed(view.viewport())?;
     let counts = if schedule == Schedule::Bands {
-        bands::draw_banded(view, options.fill_rule, kernel, threads, &mut frame)
+        bands::draw_banded(
+            view,
+            options.fill_rule,
+            kernel,
+            threads,
+            &mut frame,
+            &options.deadline,
+        )
     } else {
         fast::draw_all(view, options.fill_rule, kernel, &mut frame)
     };
+    // Bands skipped past the deadline leave the frame unfinished: never returned.
+    options.check_time("z-buffer bands")?;
     Ok((frame, counts.fast_stats(view)))
 }
 
