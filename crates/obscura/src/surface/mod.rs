@@ -34,7 +34,8 @@ use serde::ser::{Serialize, SerializeMap, Serializer};
 
 use crate::geom::BoundsKind;
 use crate::raster::FillRule;
-use crate::view::PreparedView;
+use crate::index::SceneIndex;
+use crate::view::{PreparedView, View};
 use crate::{Error, Frame, Result};
 
 /// A hidden-surface algorithm.
@@ -103,6 +104,21 @@ impl Algorithm {
     #[must_use]
     pub fn is_exact(self) -> bool {
         self != Algorithm::Octree
+    }
+
+    /// Whether the algorithm reads the clipped screen polygons of a
+    /// [`PreparedView`]; the others (ray casters, BSP, octree) read only the
+    /// [`View`]'s decisions and the scene's structures.
+    #[must_use]
+    pub fn needs_polygons(self) -> bool {
+        matches!(
+            self,
+            Algorithm::ZBuffer
+                | Algorithm::Scanline
+                | Algorithm::DepthSort
+                | Algorithm::DepthSortMatrix
+                | Algorithm::Warnock
+        )
     }
 }
 
@@ -288,7 +304,21 @@ impl Serialize for Stats {
 /// assert!(frame.covered_pixels() > 0);
 /// assert!(stats.get("time_ms").is_some());
 /// ```
+///
+/// The structures an algorithm needs (triangles, BVH, grid, BSP tree, octree) are built
+/// for this call; to build them once for many views, render through a
+/// [`SceneIndex`](crate::index::SceneIndex).
 pub fn render(
+    algorithm: Algorithm,
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    render_indexed(&SceneIndex::new(view.scene()), algorithm, view, options)
+}
+
+/// [`render`] with the structures of `index` (which must be of the view's scene).
+pub(crate) fn render_indexed(
+    index: &SceneIndex<'_>,
     algorithm: Algorithm,
     view: &PreparedView<'_>,
     options: &RenderOptions,
@@ -300,15 +330,54 @@ pub fn render(
         Algorithm::Scanline => scanline::render(view, options),
         Algorithm::DepthSort => depth_sort::render(view, options),
         Algorithm::DepthSortMatrix => depth_sort::render_matrix(view, options),
-        Algorithm::Bsp => bsp::render(view, options),
         Algorithm::Warnock => warnock::render(view, options),
-        Algorithm::Raycast => raycast::render(view, raycast::Acceleration::BruteForce, options),
+        _ => return render_view_unchecked(index, algorithm, view, options, start),
+    }?;
+    stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
+    Ok((frame, stats))
+}
+
+/// Renders a [`View`] with an algorithm that needs no screen polygons
+/// ([`Algorithm::needs_polygons`] false), the structures taken from `index`. The
+/// budget check counts the view's front faces of kept objects for its polygons (the
+/// polygons before outcode rejection and clipping, which are not built).
+pub(crate) fn render_view_indexed(
+    index: &SceneIndex<'_>,
+    algorithm: Algorithm,
+    view: &View<'_>,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    let start = Instant::now();
+    let polygons = view
+        .culled_polygons()
+        .iter()
+        .filter(|&&culled| !culled)
+        .count() as u64;
+    check_counts(algorithm, view, polygons, view.vertex_count() as u64, options)?;
+    render_view_unchecked(index, algorithm, view, options, start)
+}
+
+fn render_view_unchecked(
+    index: &SceneIndex<'_>,
+    algorithm: Algorithm,
+    view: &View<'_>,
+    options: &RenderOptions,
+    start: Instant,
+) -> Result<(Frame, Stats)> {
+    use raycast::Acceleration;
+    let (frame, mut stats) = match algorithm {
+        Algorithm::Bsp => bsp::render_indexed(index, view, options),
+        Algorithm::Raycast => raycast::render_indexed(index, view, Acceleration::BruteForce, options),
         Algorithm::RaycastBounds => {
-            raycast::render(view, raycast::Acceleration::Bounds(options.bounds), options)
+            raycast::render_indexed(index, view, Acceleration::Bounds(options.bounds), options)
         }
-        Algorithm::RaycastBvh => raycast::render(view, raycast::Acceleration::Bvh, options),
-        Algorithm::RaycastGrid => raycast::render(view, raycast::Acceleration::Grid, options),
-        Algorithm::Octree => octree::render(view, options),
+        Algorithm::RaycastBvh => raycast::render_indexed(index, view, Acceleration::Bvh, options),
+        Algorithm::RaycastGrid => raycast::render_indexed(index, view, Acceleration::Grid, options),
+        Algorithm::Octree => octree::render_indexed(index, view, options),
+        _ => Err(Error::option(
+            "algorithm",
+            format!("{algorithm} needs the screen polygons of a prepared view"),
+        )),
     }?;
     stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
     Ok((frame, stats))
@@ -332,6 +401,23 @@ pub fn check_budget(
     view: &PreparedView<'_>,
     options: &RenderOptions,
 ) -> Result<()> {
+    check_counts(
+        algorithm,
+        view,
+        view.polygon_count() as u64,
+        view.vertices().len() as u64,
+        options,
+    )
+}
+
+/// [`check_budget`] for a view with `view_polygons` polygons and `vertices` vertices.
+fn check_counts(
+    algorithm: Algorithm,
+    view: &View<'_>,
+    view_polygons: u64,
+    vertices: u64,
+    options: &RenderOptions,
+) -> Result<()> {
     let budget = options.budget();
     let pixels = view.viewport().pixel_count() as u64;
     let painted_keys = matches!(algorithm, Algorithm::DepthSort | Algorithm::DepthSortMatrix)
@@ -349,9 +435,8 @@ pub fn check_budget(
     ) {
         view.scene().triangle_count() as u64
     } else {
-        view.polygon_count() as u64
+        view_polygons
     };
-    let vertices = view.vertices().len() as u64;
     // Bytes per view polygon and per view vertex of each algorithm's own copies.
     let (per_polygon, per_vertex, structure) = match algorithm {
         Algorithm::ZBuffer | Algorithm::Octree => return Ok(()),
