@@ -4,8 +4,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use obscura::frame::{available_memory, check_frames_fit};
 use obscura::SceneIndex;
+use obscura::frame::{available_memory, check_frames_fit};
 use obscura::surface::{Algorithm, Stats};
 use obscura::{Frame, Result, RgbImage, Viewport, prepare};
 use serde_json::json;

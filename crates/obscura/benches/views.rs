@@ -77,7 +77,9 @@ fn main() {
                 index.bvh();
             }
             _ => {
-                let bsp = ro.bsp.with_memory_limit(ro.bsp.memory_limit.or(ro.memory_limit));
+                let bsp = ro
+                    .bsp
+                    .with_memory_limit(ro.bsp.memory_limit.or(ro.memory_limit));
                 index.bsp(&bsp).expect("BSP tree within the budget");
             }
         }

@@ -294,13 +294,13 @@ impl<'s> SceneIndex<'s> {
     /// The octree of the scene at `depth`, checked against the budget of `options`
     /// before it is built the first time ([`surface::octree::check_budget`]).
     pub fn octree(&self, depth: u32, options: &RenderOptions) -> Result<Arc<Octree>> {
-        let (tree, built) = self
-            .octrees
-            .get_or_build_unlocked((depth, options.budget().limit()), || {
-                let probe = options.clone().with_octree_depth(depth);
-                surface::octree::check_budget(self.scene, &probe)?;
-                Octree::from_scene(self.scene, depth)
-            })?;
+        let (tree, built) =
+            self.octrees
+                .get_or_build_unlocked((depth, options.budget().limit()), || {
+                    let probe = options.clone().with_octree_depth(depth);
+                    surface::octree::check_budget(self.scene, &probe)?;
+                    Octree::from_scene(self.scene, depth)
+                })?;
         if built {
             self.counters.octree.fetch_add(1, Ordering::Relaxed);
         }
@@ -384,7 +384,10 @@ mod tests {
         assert!(std::ptr::eq(index.bvh(), index.bvh()));
         assert!(std::ptr::eq(index.triangles(), index.triangles()));
         let bsp = BspOptions::default().with_memory_limit(ro.memory_limit);
-        assert!(Arc::ptr_eq(&index.bsp(&bsp).unwrap(), &index.bsp(&bsp).unwrap()));
+        assert!(Arc::ptr_eq(
+            &index.bsp(&bsp).unwrap(),
+            &index.bsp(&bsp).unwrap()
+        ));
         let o1 = index.octree(3, &ro).unwrap();
         assert!(Arc::ptr_eq(&o1, &index.octree(3, &ro).unwrap()));
         assert_eq!(index.builds().octree, 2, "depth 3 is a second octree");
@@ -407,7 +410,10 @@ mod tests {
             .grid(&GridOptions::default().with_density(8.0), &budget)
             .unwrap();
         assert!(!Arc::ptr_eq(&g1, &g2));
-        assert!(Arc::ptr_eq(&g1, &index.grid(&GridOptions::default(), &budget).unwrap()));
+        assert!(Arc::ptr_eq(
+            &g1,
+            &index.grid(&GridOptions::default(), &budget).unwrap()
+        ));
         assert_eq!(index.builds().grid, 2);
     }
 

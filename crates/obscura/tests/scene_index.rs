@@ -16,13 +16,23 @@ fn cameras(scene: &Scene) -> Vec<Camera> {
     let (c, e) = ((b.min + b.max) * 0.5, (b.max - b.min) * 0.5);
     let low = c - DVec3::new(0.0, 0.6 * e.y, 0.0);
     vec![
-        Camera::perspective(low, low + DVec3::new(1.0, 0.1, 0.3), DVec3::Y, 60.0, 0.05, 50.0 * e.length()),
+        Camera::perspective(
+            low,
+            low + DVec3::new(1.0, 0.1, 0.3),
+            DVec3::Y,
+            60.0,
+            0.05,
+            50.0 * e.length(),
+        ),
         Camera::perspective(c + e * 2.5, c, DVec3::Y, 45.0, 0.05, 50.0 * e.length()),
     ]
 }
 
 fn scenes() -> Vec<(&'static str, Scene)> {
-    vec![("city", demo::city(5, 5, 3)), ("default", demo::default_scene())]
+    vec![
+        ("city", demo::city(5, 5, 3)),
+        ("default", demo::default_scene()),
+    ]
 }
 
 fn depth_bits(d: &[f32]) -> Vec<u32> {
@@ -122,8 +132,12 @@ fn object_culling_changes_no_ray_cast_or_bsp_picture() {
             off_options.frustum_cull_objects = false;
             let off = View::new(&scene, &cam, vp, &off_options).unwrap();
             culled += on.kept_objects().iter().filter(|&&k| !k).count();
-            assert!(off.kept_objects().iter().zip(scene.objects()).all(|(&k, o)| k
-                || o.mesh.polygon_count() == 0));
+            assert!(
+                off.kept_objects()
+                    .iter()
+                    .zip(scene.objects())
+                    .all(|(&k, o)| k || o.mesh.polygon_count() == 0)
+            );
             for a in [
                 Algorithm::Raycast,
                 Algorithm::RaycastBounds,

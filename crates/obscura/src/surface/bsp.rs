@@ -47,9 +47,9 @@ use glam::DVec3;
 
 use crate::accel::bsp::{BspTraversal, BspTree, BspVisitor, Viewpoint};
 use crate::clip::outcode_homogeneous;
+use crate::index::SceneIndex;
 use crate::surface::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
 use crate::surface::{RenderOptions, Stats};
-use crate::index::SceneIndex;
 use crate::view::{ModelView, View, ViewTransform, ViewVertex};
 use crate::{Error, Frame, Result};
 
@@ -75,11 +75,7 @@ pub fn render_indexed(
 
 impl BspTree {
     /// Renders a view of the scene this tree was built from (see [`render_with_tree`]).
-    pub fn render(
-        &self,
-        view: &View<'_>,
-        options: &RenderOptions,
-    ) -> Result<(Frame, Stats)> {
+    pub fn render(&self, view: &View<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
         render_with_tree(self, view, options)
     }
 }
@@ -253,7 +249,9 @@ impl BspVisitor for Visitor<'_> {
         let (tree, data) = (self.tree, self.data);
         let frag = tree.fragment(f);
         let k = frag.object as usize;
-        if !data.visible[k] || data.back_facing[data.polygon_base[k] as usize + frag.polygon as usize] {
+        if !data.visible[k]
+            || data.back_facing[data.polygon_base[k] as usize + frag.polygon as usize]
+        {
             self.counts.culled += 1;
             return ControlFlow::Continue(());
         }

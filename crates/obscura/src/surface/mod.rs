@@ -33,8 +33,8 @@ use std::time::Instant;
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
 use crate::geom::BoundsKind;
-use crate::raster::FillRule;
 use crate::index::SceneIndex;
+use crate::raster::FillRule;
 use crate::view::{PreparedView, View};
 use crate::{Error, Frame, Result};
 
@@ -353,7 +353,13 @@ pub(crate) fn render_view_indexed(
         .iter()
         .filter(|&&culled| !culled)
         .count() as u64;
-    check_counts(algorithm, view, polygons, view.vertex_count() as u64, options)?;
+    check_counts(
+        algorithm,
+        view,
+        polygons,
+        view.vertex_count() as u64,
+        options,
+    )?;
     render_view_unchecked(index, algorithm, view, options, start)
 }
 
@@ -367,7 +373,9 @@ fn render_view_unchecked(
     use raycast::Acceleration;
     let (frame, mut stats) = match algorithm {
         Algorithm::Bsp => bsp::render_indexed(index, view, options),
-        Algorithm::Raycast => raycast::render_indexed(index, view, Acceleration::BruteForce, options),
+        Algorithm::Raycast => {
+            raycast::render_indexed(index, view, Acceleration::BruteForce, options)
+        }
         Algorithm::RaycastBounds => {
             raycast::render_indexed(index, view, Acceleration::Bounds(options.bounds), options)
         }

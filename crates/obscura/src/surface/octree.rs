@@ -66,9 +66,9 @@ use crate::accel::octree::{Node, Octree};
 use crate::accel::triangles::{PrimaryRays, SceneTriangles, TieRule, WatertightRay};
 use crate::frame::BACKGROUND;
 use crate::geom::Aabb;
+use crate::index::SceneIndex;
 use crate::scene::{Camera, Viewport};
 use crate::surface::{RenderOptions, Stats};
-use crate::index::SceneIndex;
 use crate::view::View;
 use crate::{Frame, Result};
 

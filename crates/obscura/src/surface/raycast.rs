@@ -55,16 +55,16 @@ use std::time::Instant;
 
 use glam::DVec3;
 
+use crate::accel::bvh::Bvh;
 use crate::accel::bvh::packet::{PACKET, PACKET_SIDE, PacketContext, PacketStack, RayPacket};
 use crate::accel::bvh::traverse::TraceCounters;
-use crate::accel::bvh::Bvh;
 use crate::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
 use crate::accel::triangles::{
     AxisOrder, ClosestHit, HitContext, PrimaryRays, SceneTriangles, WatertightRay, WithAxisOrder,
 };
 use crate::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb, RaySlabs, Sphere};
-use crate::surface::{RenderOptions, Stats};
 use crate::index::SceneIndex;
+use crate::surface::{RenderOptions, Stats};
 use crate::view::View;
 use crate::{Frame, Result};
 

@@ -216,7 +216,12 @@ pub(super) fn check_budget(
 /// is inside. Such an object's faces then go through the outcode tests and clipping
 /// like any other (a face with an outside vertex would else keep that vertex's NaN
 /// screen position).
-pub(super) fn confirm_inside(scene: &Scene, visible: &mut [(usize, bool)], bases: &[u32], codes: &[u8]) {
+pub(super) fn confirm_inside(
+    scene: &Scene,
+    visible: &mut [(usize, bool)],
+    bases: &[u32],
+    codes: &[u8],
+) {
     for (slot, (k, inside)) in visible.iter_mut().enumerate() {
         if *inside {
             let first = bases[slot] as usize;
@@ -229,7 +234,11 @@ pub(super) fn confirm_inside(scene: &Scene, visible: &mut [(usize, bool)], bases
 /// The transform of a camera whose view the scene's coordinates resolve (checked by
 /// [`Camera::validate_for`] and [`Camera::validate_window`]), with an orthographic
 /// camera's planes fitted to the scene ([`fitted_orthographic_planes`]).
-pub(super) fn checked_transform(scene: &Scene, camera: &Camera, viewport: Viewport) -> Result<ViewTransform> {
+pub(super) fn checked_transform(
+    scene: &Scene,
+    camera: &Camera,
+    viewport: Viewport,
+) -> Result<ViewTransform> {
     camera.validate_for(viewport)?;
     camera.validate_window(viewport, scene.bounds().magnitude())?;
     let fitted = fitted_orthographic_planes(scene, camera);

@@ -10,8 +10,8 @@ use super::*;
 use crate::Result;
 use crate::clip::outcode_homogeneous;
 use crate::clip::sutherland_hodgman::{ClipEyeVertex, clip_polygon_homogeneous_masked};
-use crate::scene::{Camera, Scene, Viewport};
 use crate::geom::newell_normal;
+use crate::scene::{Camera, Scene, Viewport};
 
 /// The front end as first written: one pass per stage, intermediate lists, a clip-space
 /// copy of every vertex. [`prepare`] must give the same view.
@@ -218,5 +218,7 @@ pub(super) fn prepare_reference<'s>(
         back_face_ms: 0.0,
         stats,
     };
-    Ok(PreparedView::from_parts(view, starts, indices, faces, objects))
+    Ok(PreparedView::from_parts(
+        view, starts, indices, faces, objects,
+    ))
 }

@@ -61,7 +61,13 @@ impl PipelineStats {
         });
     }
 
-    pub(super) fn push_untimed(&mut self, stage: &'static str, unit: &'static str, input: u64, output: u64) {
+    pub(super) fn push_untimed(
+        &mut self,
+        stage: &'static str,
+        unit: &'static str,
+        input: u64,
+        output: u64,
+    ) {
         self.stages.push(StageStats {
             stage,
             unit,

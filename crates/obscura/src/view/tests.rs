@@ -2,8 +2,8 @@ use glam::DVec3;
 
 use super::*;
 use crate::cull::backface::BackfaceMode;
-use crate::scene::{Camera, Scene, Viewport};
 use crate::scene::demo;
+use crate::scene::{Camera, Scene, Viewport};
 
 #[test]
 fn cube_from_the_front_shows_one_face_filling_the_expected_square() {
