@@ -15,6 +15,12 @@
 //! | octree | [`octree`] | 000, 003 |
 //!
 //! Ties: nearer wins; on an exact depth tie the lower face id wins, in every algorithm.
+//!
+//! [`render`] builds what an algorithm needs (triangles, BVH, grid, BSP tree, octree)
+//! for its one call. To render many views of a scene, render through a
+//! [`SceneIndex`](crate::index::SceneIndex), which builds each once; the ray casters,
+//! the BSP and the octree then take a [`View`] (the view's decisions, no screen
+//! polygons).
 
 pub mod bsp;
 pub mod depth_sort;
