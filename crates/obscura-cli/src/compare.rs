@@ -4,8 +4,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
+use obscura::SceneIndex;
 use obscura::frame::{available_memory, check_frames_fit};
-use obscura::surface::{Algorithm, Stats, render};
+use obscura::surface::{Algorithm, Stats};
 use obscura::{Frame, Result, RgbImage, Viewport, prepare};
 use serde_json::json;
 
@@ -145,6 +146,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
 
     let rows = args.view.with_threads(|| {
         let view = prepare(scene, &camera, viewport, &prep)?;
+        // One index for all algorithms: the triangles, the BVH (and the grid, the BSP
+        // tree, the octree) are built once and shared by the algorithms that use them.
+        let index = SceneIndex::new(scene);
         let mut rows = Vec::new();
         // One time limit for the run: the cheap algorithms first, so that on a heavy
         // scene the costly ones are the ones skipped for the time left.
@@ -158,7 +162,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 .with_progress(progress)
                 .with_time_limit(args.view.remaining_time());
             let start = Instant::now();
-            let result = render(algorithm, &view, &options)
+            let result = index
+                .render(&view, algorithm, &options)
                 .map(|(f, s)| (f, s, start.elapsed().as_secs_f64() * 1e3))
                 .map_err(|e| {
                     let skipped = crate::common::is_over_budget(&e);

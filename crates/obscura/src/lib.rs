@@ -37,6 +37,7 @@ pub mod cull;
 mod error;
 pub mod frame;
 pub mod geom;
+pub mod index;
 pub mod memory;
 pub mod raster;
 #[doc(hidden)]
@@ -48,6 +49,7 @@ pub mod work;
 
 pub use error::{Error, Result};
 pub use frame::{BACKGROUND, Frame, RgbImage};
+pub use index::SceneIndex;
 pub use scene::{Camera, Projection, Scene, Viewport};
 pub use surface::{Algorithm, RenderOptions, Stats, render};
-pub use view::{PrepareOptions, PreparedView, prepare};
+pub use view::{PrepareOptions, PreparedView, View, prepare};

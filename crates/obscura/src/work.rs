@@ -80,6 +80,13 @@ pub struct Deadline {
 }
 
 impl Deadline {
+    /// No limit and no stop flag.
+    pub const NONE: Deadline = Deadline {
+        at: None,
+        limit: None,
+        stop: None,
+    };
+
     /// A deadline `limit` from now (`None`: no limit), with an optional stop flag.
     #[must_use]
     pub fn new(limit: Option<Duration>, stop: Option<StopFlag>) -> Self {

@@ -6,16 +6,17 @@
 //! pixels, stop once every pixel is covered). The tree ([`BspTree`]) is built once per
 //! scene in world space; each view only traverses it.
 //!
-//! - Input: a [`PreparedView`] (for the camera, viewport, transforms and options) and
-//!   a [`BspTree`] of its scene ([`render`] builds one; [`render_with_tree`] reuses
-//!   one across views). Output: a [`Frame`] equal to the z-buffer's.
+//! - Input: a [`View`] (for the camera, viewport, transforms and its decisions: the
+//!   objects it keeps, the back faces) and a [`BspTree`] of its scene ([`render`]
+//!   builds one; [`render_indexed`] takes the one of a [`SceneIndex`], built once per
+//!   scene; [`render_with_tree`] takes any). Output: a [`Frame`] equal to the z-buffer's.
 //! - Per view: each fragment goes world -> eye (`view.transform().view`; vertices of
 //!   the original mesh exactly as `view::prepare` transforms them) -> clipped and
 //!   projected (directly when inside the view volume, else
-//!   [`crate::view::ViewTransform::clip_and_project`]). Back faces are culled by the
-//!   pipeline's rule (per mesh polygon, with the same eye-space normal), and fragments
-//!   of objects the pipeline culls by their bounds are skipped (all their points are
-//!   outside the view volume, so this changes nothing but time).
+//!   [`crate::view::ViewTransform::clip_and_project`]). A fragment of a polygon the view
+//!   culls as a back face ([`View::back_facing`]) is skipped, and so are fragments of
+//!   objects the view culls by their bounds ([`View::kept_objects`]: all their points
+//!   are outside the view volume, so this changes nothing but time).
 //! - A fragment that is a piece of a split polygon is painted as the pixels of the
 //!   whole polygon on its sides of the node planes that cut it
 //!   ([`BspTree::fragment_cuts`]; the painter in `surface::image::paint`): the pieces of a polygon
@@ -51,63 +52,58 @@ use glam::DVec3;
 
 use crate::accel::bsp::{BspTraversal, BspTree, BspVisitor, Viewpoint};
 use crate::clip::outcode_homogeneous;
-use crate::cull::frustum::Containment;
-use crate::geom::newell_normal;
+use crate::index::SceneIndex;
 use crate::surface::image::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
 use crate::surface::{RenderOptions, Stats};
-use crate::view::{ModelView, PreparedView, ViewTransform, ViewVertex};
+use crate::view::{ModelView, View, ViewTransform, ViewVertex};
 use crate::{Error, Frame, Result};
 
 /// Renders a prepared view with a BSP tree built for it from `options.bsp`.
-pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+pub fn render(view: &View<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+    render_indexed(&SceneIndex::new(view.scene()), view, options)
+}
+
+/// Renders a view with the BSP tree of a scene index for `options.bsp` (built on
+/// first use, then shared by every view).
+pub fn render_indexed(
+    index: &SceneIndex<'_>,
+    view: &View<'_>,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
     // The render's budget, unless the BSP options carry their own.
     let bsp = options
         .bsp
         .with_memory_limit(options.bsp.memory_limit.or(options.memory_limit));
-    let tree = BspTree::build_until(view.scene(), &bsp, &options.deadline)?;
+    let tree = index.bsp(&bsp, &options.deadline)?;
     render_with_tree(&tree, view, options)
 }
 
 impl BspTree {
     /// Renders a view of the scene this tree was built from (see [`render_with_tree`]).
-    pub fn render(
-        &self,
-        view: &PreparedView<'_>,
-        options: &RenderOptions,
-    ) -> Result<(Frame, Stats)> {
+    pub fn render(&self, view: &View<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
         render_with_tree(self, view, options)
     }
 }
 
 /// What a view needs to know about each object and polygon.
-struct ViewData {
-    visible: Vec<bool>,
+struct ViewData<'v> {
+    /// Per scene object, whether the view keeps it ([`View::kept_objects`]).
+    visible: &'v [bool],
     /// Per tree vertex, its eye-space position (only for visible objects).
     eye: Vec<DVec3>,
     /// Per object, the index of its first polygon in `back_facing`.
-    polygon_base: Vec<usize>,
-    back_facing: Vec<bool>,
+    polygon_base: &'v [u32],
+    /// The view's back faces ([`View::back_facing`]).
+    back_facing: &'v [bool],
 }
 
-/// Which objects survive the pipeline's object culling, the eye positions of their
-/// vertices and which of their polygons are back faces: computed exactly as
-/// `view::prepare` does, so the tree shows the same faces.
-fn view_data(tree: &BspTree, view: &PreparedView<'_>) -> ViewData {
+/// The eye positions of the tree's vertices, and the view's decisions: which objects
+/// survive object culling and which polygons are back faces, read from the view (the
+/// same decisions every algorithm reads).
+fn view_data<'v>(tree: &BspTree, view: &'v View<'_>) -> ViewData<'v> {
     let scene = view.scene();
     let t = view.transform();
-    let options = view.options();
-    let planes = t.eye_frustum_planes();
-    let visible: Vec<bool> = scene
-        .objects()
-        .iter()
-        .map(|o| {
-            if o.mesh.polygon_count() == 0 {
-                return false;
-            }
-            !options.frustum_cull_objects
-                || t.object_containment(&planes, o) != Containment::Outside
-        })
-        .collect();
+    let visible = view.kept_objects();
     let model_view: Vec<ModelView> = scene
         .objects()
         .iter()
@@ -127,36 +123,11 @@ fn view_data(tree: &BspTree, view: &PreparedView<'_>) -> ViewData {
             }
         })
         .collect();
-    let mut polygon_base = Vec::with_capacity(scene.objects().len());
-    let mut back_facing = Vec::new();
-    let mut pts = Vec::new();
-    for (k, o) in scene.objects().iter().enumerate() {
-        polygon_base.push(back_facing.len());
-        if !visible[k] || !options.backface.applies_to(o.closed) {
-            back_facing.extend(std::iter::repeat_n(false, o.mesh.polygon_count()));
-            continue;
-        }
-        let base = tree.object_vertex_base(k) as usize;
-        for p in 0..o.mesh.polygon_count() {
-            let poly = o.mesh.polygon(p);
-            let at = |i: u32| eye[base + i as usize];
-            let normal = if poly.len() == 3 {
-                let (a, b, c) = (at(poly[0]), at(poly[1]), at(poly[2]));
-                (b - a).cross(c - a)
-            } else {
-                pts.clear();
-                pts.extend(poly.iter().map(|&i| at(i)));
-                newell_normal(&pts)
-            };
-            let normal = if o.mirrored { -normal } else { normal };
-            back_facing.push(t.is_back_facing_eye(normal, at(poly[0])));
-        }
-    }
     ViewData {
         visible,
         eye,
-        polygon_base,
-        back_facing,
+        polygon_base: view.polygon_base(),
+        back_facing: view.back_facing(),
     }
 }
 
@@ -176,7 +147,7 @@ struct Counts {
 /// Paints the fragments a traversal visits.
 struct Visitor<'a> {
     tree: &'a BspTree,
-    data: &'a ViewData,
+    data: &'a ViewData<'a>,
     t: ViewTransform,
     painter: &'a mut Painter,
     /// Skip subtrees whose projected box lies outside the image or over pixels
@@ -293,7 +264,9 @@ impl BspVisitor for Visitor<'_> {
         let (tree, data) = (self.tree, self.data);
         let frag = tree.fragment(f);
         let k = frag.object as usize;
-        if !data.visible[k] || data.back_facing[data.polygon_base[k] + frag.polygon as usize] {
+        if !data.visible[k]
+            || data.back_facing[data.polygon_base[k] as usize + frag.polygon as usize]
+        {
             self.counts.culled += 1;
             return ControlFlow::Continue(());
         }
@@ -348,7 +321,7 @@ impl BspVisitor for Visitor<'_> {
 /// ```
 pub fn render_with_tree(
     tree: &BspTree,
-    view: &PreparedView<'_>,
+    view: &View<'_>,
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
     if !tree.matches(view.scene()) {

@@ -15,6 +15,12 @@
 //! | octree | [`octree`] | 000, 003 |
 //!
 //! Ties: nearer wins; on an exact depth tie the lower face id wins, in every algorithm.
+//!
+//! [`render`] builds what an algorithm needs (triangles, BVH, grid, BSP tree, octree)
+//! for its one call. To render many views of a scene, render through a
+//! [`SceneIndex`](crate::index::SceneIndex), which builds each once; the ray casters,
+//! the BSP and the octree then take a [`View`] (the view's decisions, no screen
+//! polygons).
 
 pub mod bsp;
 pub mod depth_sort;
@@ -33,8 +39,9 @@ use std::time::Instant;
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
 use crate::geom::BoundsKind;
+use crate::index::SceneIndex;
 use crate::raster::FillRule;
-use crate::view::PreparedView;
+use crate::view::{PreparedView, View};
 use crate::{Error, Frame, Result};
 
 /// A hidden-surface algorithm.
@@ -103,6 +110,21 @@ impl Algorithm {
     #[must_use]
     pub fn is_exact(self) -> bool {
         self != Algorithm::Octree
+    }
+
+    /// Whether the algorithm reads the clipped screen polygons of a
+    /// [`PreparedView`]; the others (ray casters, BSP, octree) read only the
+    /// [`View`]'s decisions and the scene's structures.
+    #[must_use]
+    pub fn needs_polygons(self) -> bool {
+        matches!(
+            self,
+            Algorithm::ZBuffer
+                | Algorithm::Scanline
+                | Algorithm::DepthSort
+                | Algorithm::DepthSortMatrix
+                | Algorithm::Warnock
+        )
     }
 }
 
@@ -335,7 +357,21 @@ impl Serialize for Stats {
 /// assert!(frame.covered_pixels() > 0);
 /// assert!(stats.get("time_ms").is_some());
 /// ```
+///
+/// The structures an algorithm needs (triangles, BVH, grid, BSP tree, octree) are built
+/// for this call; to build them once for many views, render through a
+/// [`SceneIndex`](crate::index::SceneIndex).
 pub fn render(
+    algorithm: Algorithm,
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    render_indexed(&SceneIndex::new(view.scene()), algorithm, view, options)
+}
+
+/// [`render`] with the structures of `index` (which must be of the view's scene).
+pub(crate) fn render_indexed(
+    index: &SceneIndex<'_>,
     algorithm: Algorithm,
     view: &PreparedView<'_>,
     options: &RenderOptions,
@@ -354,15 +390,69 @@ pub fn render(
         Algorithm::Scanline => scanline::render(view, options),
         Algorithm::DepthSort => depth_sort::render(view, options),
         Algorithm::DepthSortMatrix => depth_sort::render_matrix(view, options),
-        Algorithm::Bsp => bsp::render(view, options),
         Algorithm::Warnock => warnock::render(view, options),
-        Algorithm::Raycast => raycast::render(view, raycast::Acceleration::BruteForce, options),
-        Algorithm::RaycastBounds => {
-            raycast::render(view, raycast::Acceleration::Bounds(options.bounds), options)
+        _ => return render_view_unchecked(index, algorithm, view, options, start),
+    }?;
+    stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
+    Ok((frame, stats))
+}
+
+/// Renders a [`View`] with an algorithm that needs no screen polygons
+/// ([`Algorithm::needs_polygons`] false), the structures taken from `index`. The
+/// budget check counts the view's front faces of kept objects for its polygons (the
+/// polygons before outcode rejection and clipping, which are not built).
+pub(crate) fn render_view_indexed(
+    index: &SceneIndex<'_>,
+    algorithm: Algorithm,
+    view: &View<'_>,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    let start = Instant::now();
+    let options = &options.clone().started();
+    options.check_time(algorithm.name())?;
+    if options.time_limit.is_some()
+        && let Some(estimate) = estimate_view(algorithm, view, options)
+    {
+        options.deadline.admit(&estimate)?;
+    }
+    let polygons = view
+        .culled_polygons()
+        .iter()
+        .filter(|&&culled| !culled)
+        .count() as u64;
+    check_counts(
+        algorithm,
+        view,
+        polygons,
+        view.vertex_count() as u64,
+        options,
+    )?;
+    render_view_unchecked(index, algorithm, view, options, start)
+}
+
+fn render_view_unchecked(
+    index: &SceneIndex<'_>,
+    algorithm: Algorithm,
+    view: &View<'_>,
+    options: &RenderOptions,
+    start: Instant,
+) -> Result<(Frame, Stats)> {
+    use raycast::Acceleration;
+    let (frame, mut stats) = match algorithm {
+        Algorithm::Bsp => bsp::render_indexed(index, view, options),
+        Algorithm::Raycast => {
+            raycast::render_indexed(index, view, Acceleration::BruteForce, options)
         }
-        Algorithm::RaycastBvh => raycast::render(view, raycast::Acceleration::Bvh, options),
-        Algorithm::RaycastGrid => raycast::render(view, raycast::Acceleration::Grid, options),
-        Algorithm::Octree => octree::render(view, options),
+        Algorithm::RaycastBounds => {
+            raycast::render_indexed(index, view, Acceleration::Bounds(options.bounds), options)
+        }
+        Algorithm::RaycastBvh => raycast::render_indexed(index, view, Acceleration::Bvh, options),
+        Algorithm::RaycastGrid => raycast::render_indexed(index, view, Acceleration::Grid, options),
+        Algorithm::Octree => octree::render_indexed(index, view, options),
+        _ => Err(Error::option(
+            "algorithm",
+            format!("{algorithm} needs the screen polygons of a prepared view"),
+        )),
     }?;
     stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
     Ok((frame, stats))
@@ -387,7 +477,53 @@ pub fn estimate(
     view: &PreparedView<'_>,
     options: &RenderOptions,
 ) -> Option<crate::work::Estimate> {
-    use crate::work::{Estimate, NS_PER_PAINTED_PIXEL, NS_PER_RAY_TRIANGLE};
+    use crate::work::{Estimate, NS_PER_PAINTED_PIXEL};
+    let pixels = view.viewport().pixel_count() as f64;
+    let name = algorithm.name();
+    match algorithm {
+        Algorithm::DepthSort | Algorithm::DepthSortMatrix => Some(Estimate::new(
+            name,
+            "pixels painted",
+            painted_pixels(view),
+            NS_PER_PAINTED_PIXEL,
+        )),
+        Algorithm::Bsp
+            if options.bsp.traversal == crate::accel::bsp::BspTraversal::BackToFront =>
+        {
+            Some(Estimate::new(
+                name,
+                "pixels painted",
+                painted_pixels(view),
+                NS_PER_PAINTED_PIXEL,
+            ))
+        }
+        // The z-buffer tests at most every pixel of every polygon; the sum of their
+        // areas is only measured when the crude bound (every polygon the whole image)
+        // could matter, so that ordinary views pay nothing for it.
+        Algorithm::ZBuffer
+            if view.polygon_count() as f64 * pixels * crate::work::NS_PER_ZBUFFER_PIXEL
+                > 1e9 =>
+        {
+            Some(Estimate::new(
+                name,
+                "pixels tested",
+                painted_pixels(view),
+                crate::work::NS_PER_ZBUFFER_PIXEL,
+            ))
+        }
+        _ => estimate_view(algorithm, view, options),
+    }
+}
+
+/// The estimates of [`estimate`] that need no screen polygons (the ray casters and the
+/// octree): what a [`View`] rendered without them is refused on.
+#[must_use]
+pub fn estimate_view(
+    algorithm: Algorithm,
+    view: &View<'_>,
+    options: &RenderOptions,
+) -> Option<crate::work::Estimate> {
+    use crate::work::{Estimate, NS_PER_RAY_TRIANGLE};
     let vp = view.viewport();
     let pixels = vp.pixel_count() as f64;
     let name = algorithm.name();
@@ -415,33 +551,6 @@ pub fn estimate(
                 "ray-triangle tests",
                 tests,
                 NS_PER_RAY_TRIANGLE,
-            ))
-        }
-        Algorithm::DepthSort | Algorithm::DepthSortMatrix => Some(Estimate::new(
-            name,
-            "pixels painted",
-            painted_pixels(view),
-            NS_PER_PAINTED_PIXEL,
-        )),
-        Algorithm::Bsp if options.bsp.traversal == crate::accel::bsp::BspTraversal::BackToFront => {
-            Some(Estimate::new(
-                name,
-                "pixels painted",
-                painted_pixels(view),
-                NS_PER_PAINTED_PIXEL,
-            ))
-        }
-        // The z-buffer tests at most every pixel of every polygon; the sum of their
-        // areas is only measured when the crude bound (every polygon the whole image)
-        // could matter, so that ordinary views pay nothing for it.
-        Algorithm::ZBuffer
-            if view.polygon_count() as f64 * pixels * crate::work::NS_PER_ZBUFFER_PIXEL > 1e9 =>
-        {
-            Some(Estimate::new(
-                name,
-                "pixels tested",
-                painted_pixels(view),
-                crate::work::NS_PER_ZBUFFER_PIXEL,
             ))
         }
         Algorithm::Octree => Some(Estimate::new(
@@ -480,7 +589,7 @@ fn painted_pixels(view: &PreparedView<'_>) -> f64 {
 
 /// The pixels of the image inside the screen rectangle of a world box (all of them
 /// when a corner is at or behind the eye plane).
-fn screen_rect_pixels(view: &PreparedView<'_>, b: &crate::geom::Aabb) -> f64 {
+fn screen_rect_pixels(view: &View<'_>, b: &crate::geom::Aabb) -> f64 {
     let vp = view.viewport();
     let (w, h) = (f64::from(vp.width), f64::from(vp.height));
     let whole = w * h;
@@ -536,6 +645,23 @@ pub fn check_budget(
     view: &PreparedView<'_>,
     options: &RenderOptions,
 ) -> Result<()> {
+    check_counts(
+        algorithm,
+        view,
+        view.polygon_count() as u64,
+        view.vertices().len() as u64,
+        options,
+    )
+}
+
+/// [`check_budget`] for a view with `view_polygons` polygons and `vertices` vertices.
+fn check_counts(
+    algorithm: Algorithm,
+    view: &View<'_>,
+    view_polygons: u64,
+    vertices: u64,
+    options: &RenderOptions,
+) -> Result<()> {
     let budget = options.budget();
     let pixels = view.viewport().pixel_count() as u64;
     let painted_keys = matches!(algorithm, Algorithm::DepthSort | Algorithm::DepthSortMatrix)
@@ -553,9 +679,8 @@ pub fn check_budget(
     ) {
         view.scene().triangle_count() as u64
     } else {
-        view.polygon_count() as u64
+        view_polygons
     };
-    let vertices = view.vertices().len() as u64;
     // Bytes per view polygon and per view vertex of each algorithm's own copies.
     let (per_polygon, per_vertex, structure) = match algorithm {
         Algorithm::ZBuffer | Algorithm::Octree => return Ok(()),

@@ -6,10 +6,12 @@
 //! (1)-(2)" (the octree as a hierarchical subdivision of space; occlusion decided by the
 //! order of the cells).
 //!
-//! - Input: a [`PreparedView`]; the octree is built from its scene in world space, or
+//! - Input: a [`View`] (its camera and viewport); the octree ([`render`] builds one;
+//!   [`render_indexed`] takes the one of a [`SceneIndex`], built once per scene and
+//!   depth) is built from its scene in world space, or
 //!   relative to the scene's centre when the scene lies far from the origin beside its
 //!   size ([`Octree::from_scene`], depth [`RenderOptions::octree_depth`]: the same image
-//!   at any offset) and viewed with its camera. The prepared polygons are not used: the octree is an object-space
+//!   at any offset) and viewed with its camera. No screen polygon is used: the octree is an object-space
 //!   representation of its own.
 //! - Output: a [`Frame`]. Per pixel, the world-space ray of the pixel centre
 //!   ([`crate::scene::Camera::ray`]) walks the tree front to back
@@ -64,25 +66,35 @@ use crate::accel::octree::{Node, Octree};
 use crate::accel::triangles::{PrimaryRays, SceneTriangles, TieRule, WatertightRay};
 use crate::frame::BACKGROUND;
 use crate::geom::Aabb;
+use crate::index::SceneIndex;
 use crate::scene::{Camera, Viewport};
 use crate::surface::{RenderOptions, Stats};
-use crate::view::PreparedView;
+use crate::view::View;
 use crate::{Frame, Result};
 
 /// Renders a prepared view by voxelizing its scene into an octree and tracing one ray
 /// per pixel through it, front to back.
-pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+pub fn render(view: &View<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+    render_indexed(&SceneIndex::new(view.scene()), view, options)
+}
+
+/// Renders a view with the octree of a scene index at `options.octree_depth` (built on
+/// first use, then shared by every view) and its triangles.
+pub fn render_indexed(
+    index: &SceneIndex<'_>,
+    view: &View<'_>,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
     let vp = view.viewport();
-    check_budget(view.scene(), options)?;
-    let mut frame = Frame::new(vp)?;
     let start = Instant::now();
-    let tree = Octree::from_scene_until(view.scene(), options.octree_depth, &options.deadline)?;
+    let tree = index.octree(options.octree_depth, options)?;
     let build_ms = start.elapsed().as_secs_f64() * 1e3;
+    let mut frame = Frame::new(vp)?;
     options.report(0.5);
 
     let start = Instant::now();
     let camera = *view.camera();
-    let near = NearFaces::new(view, &tree);
+    let near = NearFaces::new(view, index.triangles(), &tree);
     let visited = trace_rows(&tree, &camera, vp, &near, &mut frame);
     let trace_ms = start.elapsed().as_secs_f64() * 1e3;
     options.report(1.0);
@@ -217,7 +229,7 @@ struct NearFaces {
 }
 
 impl NearFaces {
-    fn new(view: &PreparedView<'_>, tree: &Octree) -> NearFaces {
+    fn new(view: &View<'_>, all: &SceneTriangles, tree: &Octree) -> NearFaces {
         let (camera, vp) = (view.camera(), view.viewport());
         let tie = PrimaryRays::new(camera, vp).tie_rule();
         let voxel = tree.region().cell_side(tree.depth());
@@ -234,7 +246,6 @@ impl NearFaces {
             min: window.min - pad,
             max: window.max + pad,
         };
-        let all = SceneTriangles::new(view.scene());
         let faces = all.polygon_faces();
         let triangles = all
             .vertices()

@@ -8,17 +8,16 @@
 //! # The independent check
 //! Rays are generated from the [`Camera`](crate::Camera) in world space
 //! ([`crate::scene::Camera::ray`] through `(i + 0.5, j + 0.5)`), not from the prepared
-//! view's screen polygons: the scene's world-space triangles, the camera and the back-
-//! face rule are all this module uses of the [`PreparedView`], so agreeing with the
+//! view's screen polygons: the scene's world-space triangles, the camera and the
+//! view's culling decisions are all this module uses of the [`View`], so agreeing with the
 //! z-buffer checks the whole pipeline (transforms, clipping, projection, coverage).
 //!
 //! - Perspective rays have `direction · forward = 1`, so the ray parameter `t` *is* the
 //!   eye-space depth; orthographic rays start on the eye plane with the unit forward
 //!   direction. Hits are accepted for `near <= t <= far` (the clipping planes).
-//! - Back faces: on objects whose back faces the view culls
-//!   ([`BackfaceMode::applies_to`](crate::cull::backface::BackfaceMode::applies_to)),
-//!   faces whose world-space normal points away from the viewer are ignored, with the
-//!   pipeline's formula (edge-on counts as back).
+//! - Culling: the faces the view culls ([`View::culled_polygons`]: back faces, and
+//!   the faces of objects outside the frustum) are ignored. The view decides them
+//!   once, for every algorithm; rays never re-derive them.
 //! - Ties: nearer wins; at exactly the same `t` the lower face id.
 //! - Faces are fan-triangulated; the watertight `f64` test
 //!   ([`crate::accel::triangles`]) decides rays through edges by the top-left rule, so
@@ -36,7 +35,9 @@
 //! All four run the same exact test on the same triangles, so they return the same
 //! frame; they differ only in how many tests they need.
 //!
-//! - Input: a [`PreparedView`] (for its scene, camera, viewport and back-face mode).
+//! - Input: a [`View`] (for its scene, camera, viewport and culling decisions); the
+//!   triangles and the BVH or grid are built per call by [`render`], once per scene by
+//!   [`render_indexed`] (a [`SceneIndex`]).
 //!   Output: a [`Frame`] (face id and eye-space depth `t` as `f32`) and [`Stats`].
 //! - Complexity: brute force O(p T) for p pixels and T triangles; bounds O(p (K + T_hit))
 //!   for K objects; BVH about O(p log T); grid O(p (cells per ray + refs per cell)).
@@ -54,16 +55,17 @@ use std::time::Instant;
 
 use glam::DVec3;
 
+use crate::accel::bvh::Bvh;
 use crate::accel::bvh::packet::{PACKET, PACKET_SIDE, PacketContext, PacketStack, RayPacket};
 use crate::accel::bvh::traverse::TraceCounters;
-use crate::accel::bvh::{Bvh, BvhOptions};
 use crate::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
 use crate::accel::triangles::{
     AxisOrder, ClosestHit, HitContext, PrimaryRays, SceneTriangles, WatertightRay, WithAxisOrder,
 };
 use crate::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb, RaySlabs, Sphere};
+use crate::index::SceneIndex;
 use crate::surface::{RenderOptions, Stats};
-use crate::view::PreparedView;
+use crate::view::View;
 use crate::{Frame, Result};
 
 /// How rays find the faces they may hit.
@@ -119,41 +121,48 @@ impl AddAssign for RayCounters {
     }
 }
 
-/// Renders by casting one ray per pixel from the camera in world space.
+/// Renders by casting one ray per pixel from the camera in world space; the
+/// triangles and the hierarchy or grid are built for this call (see
+/// [`render_indexed`] to build them once per scene).
 pub fn render(
-    view: &PreparedView<'_>,
+    view: &View<'_>,
     acceleration: Acceleration,
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
-    let start = Instant::now();
-    let triangles = SceneTriangles::new(view.scene());
-    let soup_ms = ms_since(start);
+    render_indexed(&SceneIndex::new(view.scene()), view, acceleration, options)
+}
+
+/// [`render`] with the triangles, hierarchy and grid of a scene index (built on first
+/// use, then shared by every view).
+pub fn render_indexed(
+    index: &SceneIndex<'_>,
+    view: &View<'_>,
+    acceleration: Acceleration,
+    options: &RenderOptions,
+) -> Result<(Frame, Stats)> {
+    let (triangles, soup_ms) = index.triangles_timed();
     let (frame, mut stats) = match acceleration {
-        Acceleration::BruteForce => render_brute_force(view, &triangles, options),
-        Acceleration::Bounds(kind) => render_bounds(view, &triangles, kind, options),
-        Acceleration::Bvh => {
-            let bvh = Bvh::build(&triangles, &BvhOptions::default());
-            render_bvh(view, &triangles, &bvh, options)
-        }
+        Acceleration::BruteForce => render_brute_force(view, triangles, options),
+        Acceleration::Bounds(kind) => render_bounds(view, triangles, kind, options),
+        Acceleration::Bvh => render_bvh(view, triangles, index.bvh(), options),
         Acceleration::Grid => {
             // Cells sized for the rounding of this view's rays (see `accel::grid`).
             let origins = PrimaryRays::new(view.camera(), view.viewport()).origin_magnitude();
-            let grid = UniformGrid::build_until(
-                &triangles,
+            let grid = index.grid(
                 &GridOptions::default().with_ray_origins(origins),
                 &options.budget(),
                 &options.deadline,
             )?;
-            render_grid(view, &triangles, &grid, options)
+            render_grid(view, triangles, &grid, options)
         }
     }?;
-    stats.set("triangles_ms", soup_ms);
+    stats.set("triangles_ms", *soup_ms);
     Ok((frame, stats))
 }
 
 /// Brute force: every ray against every triangle (seed 000's `RayCasting`).
 pub fn render_brute_force(
-    view: &PreparedView<'_>,
+    view: &View<'_>,
     triangles: &SceneTriangles,
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
@@ -173,7 +182,7 @@ pub fn render_brute_force(
             )
         }
     }
-    let setup = Setup::new(view, triangles, options);
+    let setup = Setup::new(view, triangles, options)?;
     let start = Instant::now();
     let (frame, counters) = setup.cast(options, |ctx, counters| {
         ctx.ray.dispatch(Run {
@@ -246,7 +255,7 @@ impl ObjectBound {
 /// nearest volume first, and the search stops at a volume that starts behind the
 /// nearest hit found.
 pub fn render_bounds(
-    view: &PreparedView<'_>,
+    view: &View<'_>,
     triangles: &SceneTriangles,
     kind: BoundsKind,
     options: &RenderOptions,
@@ -295,7 +304,7 @@ pub fn render_bounds(
             closest
         }
     }
-    let setup = Setup::new(view, triangles, options);
+    let setup = Setup::new(view, triangles, options)?;
     let build = Instant::now();
     let margin = 1e-9 * setup.scale.max(f64::MIN_POSITIVE);
     let mut points: Vec<DVec3> = Vec::new();
@@ -354,12 +363,12 @@ pub fn render_bounds(
 /// Through a bounding-volume hierarchy built beforehand from the same triangles (so one
 /// build serves many views).
 pub fn render_bvh(
-    view: &PreparedView<'_>,
+    view: &View<'_>,
     triangles: &SceneTriangles,
     bvh: &Bvh,
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
-    let setup = Setup::new(view, triangles, options);
+    let setup = Setup::new(view, triangles, options)?;
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
         let mut stack = PacketStack::default();
@@ -406,12 +415,12 @@ pub fn render_bvh(
 
 /// Through a uniform grid built beforehand from the same triangles.
 pub fn render_grid(
-    view: &PreparedView<'_>,
+    view: &View<'_>,
     triangles: &SceneTriangles,
     grid: &UniformGrid,
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
-    let setup = Setup::new(view, triangles, options);
+    let setup = Setup::new(view, triangles, options)?;
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
         let mut mailbox = Mailbox::new(triangles);
@@ -484,13 +493,21 @@ struct Setup<'a> {
 
 impl<'a> Setup<'a> {
     fn new(
-        view: &PreparedView<'_>,
+        view: &View<'_>,
         triangles: &'a SceneTriangles,
         options: &RenderOptions,
-    ) -> Self {
+    ) -> Result<Self> {
         let fill = options.fill_rule;
         let camera = view.camera();
-        let ignored = triangles.ignored_polygons(view.scene(), camera, view.options().backface);
+        // The view's decisions (objects outside the frustum, back faces), numbered as
+        // the triangles number polygons: in scene order.
+        let ignored = view.culled_polygons();
+        if ignored.len() != triangles.polygon_count() {
+            return Err(crate::Error::option(
+                "triangles",
+                "the triangles were built from another scene than the view's",
+            ));
+        }
         let front_triangles = triangles
             .triangle_polygons()
             .iter()
@@ -504,7 +521,7 @@ impl<'a> Setup<'a> {
         };
         let vp = view.viewport();
         let rays = PrimaryRays::new(camera, vp).with_fill_rule(fill);
-        Setup {
+        Ok(Setup {
             window_x: (0..vp.width)
                 .map(|i| rays.window_x(f64::from(i) + 0.5))
                 .collect(),
@@ -518,7 +535,7 @@ impl<'a> Setup<'a> {
             scale,
             triangle_count: triangles.len(),
             deadline: options.deadline.clone(),
-        }
+        })
     }
 
     /// Casts every pixel's ray with `trace`.

@@ -1,5 +1,6 @@
 //! The two passes of [`prepare`](super::prepare): vertices (transform, outcode, screen
-//! position) and faces (back-face test, outcode rejection, clipping, emission), each
+//! position) and faces (the view's back faces skipped, outcode rejection, clipping,
+//! emission; the back faces are marked once by `View::new`), each
 //! serial or, with the `parallel` feature and more than one thread, on chunks in
 //! parallel. Both orders of work give the same arrays: chunks are contiguous runs of
 //! vertices or faces, concatenated in order.
@@ -25,8 +26,6 @@ use glam::{DVec3, DVec4};
 use super::{ModelView, ViewTransform, ViewVertex};
 use crate::clip::outcode_homogeneous;
 use crate::clip::sutherland_hodgman::{ClipEyeVertex, clip_polygon_homogeneous_masked};
-use crate::cull::backface::BackfaceMode;
-use crate::geom::newell_normal;
 use crate::scene::Scene;
 
 /// Threads available: rayon's current pool with the `parallel` feature, else 1.
@@ -320,7 +319,10 @@ pub(super) struct FaceContext<'a> {
     pub vertices: &'a [ViewVertex],
     pub codes: &'a [u8],
     pub t: &'a ViewTransform,
-    pub backface: BackfaceMode,
+    /// Per scene object, its first scene polygon.
+    pub polygon_base: &'a [u32],
+    /// The view's back faces, per scene polygon.
+    pub back_facing: &'a [bool],
 }
 
 /// The polygons the face pass emits, and its counts per stage.
@@ -346,7 +348,6 @@ pub(super) struct FaceOutput {
 /// Scratch vectors of the clipper.
 #[derive(Default)]
 struct Scratch {
-    eye: Vec<DVec3>,
     input: Vec<ClipEyeVertex>,
     out: Vec<ClipEyeVertex>,
     scratch: Vec<ClipEyeVertex>,
@@ -366,25 +367,14 @@ fn faces_of(
     let (k, inside) = ctx.visible[slot];
     let o = &ctx.scene.objects()[k];
     let base = ctx.bases[slot];
-    let cull = ctx.backface.applies_to(o.closed);
+    let back_facing = &ctx.back_facing[ctx.polygon_base[k] as usize..];
     let (mstarts, mindices, mfaces) = o.mesh.polygon_arrays();
     let (vertices, codes, t) = (ctx.vertices, ctx.codes, ctx.t);
     for p in polygons {
         let poly = &mindices[mstarts[p] as usize..mstarts[p + 1] as usize];
-        if cull {
-            let eye = |i: u32| vertices[(base + i) as usize].eye;
-            let normal = if let &[a, b, c] = poly {
-                let (a, b, c) = (eye(a), eye(b), eye(c));
-                (b - a).cross(c - a)
-            } else {
-                s.eye.clear();
-                s.eye.extend(poly.iter().map(|&i| eye(i)));
-                newell_normal(&s.eye)
-            };
-            let normal = if o.mirrored { -normal } else { normal };
-            if t.is_back_facing_eye(normal, eye(poly[0])) {
-                continue;
-            }
+        // The view's decision (`View::back_facing`), made once for every algorithm.
+        if back_facing[p] {
+            continue;
         }
         out.front += 1;
         let or = if inside {

@@ -42,7 +42,7 @@ use crate::accel::triangles::PrimaryRays;
 use crate::frame::BACKGROUND;
 use crate::geom::Plane;
 use crate::raster::{DepthPlane, FillRule, PixelRect, PolygonCoverage};
-use crate::view::{PreparedView, ViewTransform, ViewVertex};
+use crate::view::{View, ViewTransform, ViewVertex};
 use crate::{Frame, Result};
 
 /// How [`Painter::paint`] treats pixels already painted.
@@ -129,7 +129,7 @@ impl PixelRays {
     /// The view's rays (world space, [`PrimaryRays`]) carried into another frame by
     /// an affine map of world space: `point` maps points, `vector` its linear part.
     pub fn new(
-        view: &PreparedView<'_>,
+        view: &View<'_>,
         point: impl Fn(DVec3) -> DVec3,
         vector: impl Fn(DVec3) -> DVec3,
     ) -> Self {
@@ -197,7 +197,7 @@ const BLOCK: u32 = 8;
 
 impl Painter {
     /// A background frame for the view.
-    pub fn new(view: &PreparedView<'_>, fill: FillRule, mode: PaintMode) -> Result<Self> {
+    pub fn new(view: &View<'_>, fill: FillRule, mode: PaintMode) -> Result<Self> {
         let vp = view.viewport();
         let frame = Frame::new(vp)?;
         let (bx, by) = (vp.width.div_ceil(BLOCK), vp.height.div_ceil(BLOCK));
@@ -454,7 +454,7 @@ impl Painter {
 mod tests {
     use super::*;
     use crate::scene::{Camera, Scene, Viewport};
-    use crate::view::{PrepareOptions, prepare};
+    use crate::view::{PrepareOptions, PreparedView, prepare};
     use glam::DVec3;
 
     fn empty_view(scene: &Scene, w: u32, h: u32) -> PreparedView<'_> {

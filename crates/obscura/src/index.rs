@@ -1,0 +1,491 @@
+//! [`SceneIndex`]: the structures of one scene, each built once, on first use, and
+//! shared by every view and every thread.
+//!
+//! Every view of a scene traverses the same acceleration structures; only the camera
+//! changes. The index owns them: the world-space triangles (fan-triangulated faces
+//! with their normals, [`SceneTriangles`]), the BVH over them ([`Bvh`]), uniform grids
+//! ([`UniformGrid`]), BSP trees ([`BspTree`]), octrees at a depth ([`Octree`]) and the
+//! edge adjacency of every mesh ([`EdgeAdjacency`]). Each is built the first time an
+//! algorithm asks for it and kept; a view then costs what its traversal costs.
+//!
+//! ```text
+//! Scene ─► SceneIndex ─ triangles, BVH, grid(options), BSP(options), octree(depth),
+//!    │                  edge adjacency: built on first use, shared (Sync)
+//!    └─► View::new(camera, viewport) ─ per view, once: objects kept, back faces
+//!          ├─► ray casters, BSP, octree: the index's structures + the view's decisions
+//!          └─► View::into_prepared ─► screen polygons ─► z-buffer, scanline, ...
+//! ```
+//!
+//! ```
+//! use obscura::{index::SceneIndex, scene::{demo, Viewport}, view::{PrepareOptions, View}};
+//! use obscura::surface::{Algorithm, RenderOptions};
+//! let scene = demo::cube();
+//! let index = SceneIndex::new(&scene);
+//! let vp = Viewport::new(64, 48).unwrap();
+//! for eye in [glam::DVec3::new(2., 1.5, 3.), glam::DVec3::new(-3., -1., 2.)] {
+//!     let camera = obscura::Camera::perspective(eye, glam::DVec3::ZERO, glam::DVec3::Y, 50.0, 0.1, 20.0);
+//!     let view = View::new(&scene, &camera, vp, &PrepareOptions::default()).unwrap();
+//!     let (frame, _) = index.render_view(&view, Algorithm::RaycastBvh, &RenderOptions::default()).unwrap();
+//!     assert!(frame.covered_pixels() > 0);
+//! }
+//! assert_eq!(index.builds().bvh, 1); // one hierarchy for both views
+//! ```
+//!
+//! # Options and budgets
+//! A structure whose build depends on options is kept per options: grids by their
+//! [`GridOptions`] (which hold the magnitude of the view's ray origins) and memory
+//! budget, BSP trees by their [`BspOptions`] (with the budget they carry), octrees by
+//! depth and budget. At most [`KEPT_PER_STRUCTURE`] of each are kept, the oldest
+//! dropped first. Memory budgets ([`crate::budget`]) apply to every build as they did
+//! without the index; a build refused by its budget is not kept, so the next call
+//! tries again (with its own budget).
+//!
+//! # Threads
+//! The index is `Sync`: threads share it by reference. A structure is built by the
+//! first thread that asks; others asking meanwhile wait for it (one build), except the
+//! octree, whose build runs on rayon's pool and is therefore not done under a lock (a
+//! rayon worker waiting for the lock could be the one holding it): two threads asking
+//! for the same octree at once may each build it, and the first kept is the one
+//! returned to both afterwards.
+//!
+//! # Limitations
+//! The index borrows its scene; a scene changed after indexing needs a new index.
+//! Grids depend on the ray origins of a view (see [`crate::accel::grid`]): views from
+//! eyes at other distances from the origin get grids of their own.
+
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
+use std::time::Instant;
+
+use crate::accel::bsp::BspOptions;
+use crate::accel::bsp::BspTree;
+use crate::accel::bvh::{Bvh, BvhOptions};
+use crate::accel::grid::{GridOptions, UniformGrid};
+use crate::accel::octree::Octree;
+use crate::accel::triangles::SceneTriangles;
+use crate::budget::MemoryBudget;
+use crate::scene::{EdgeAdjacency, Scene};
+use crate::surface::{self, Algorithm, RenderOptions, Stats};
+use crate::view::{PreparedView, View};
+use crate::{Error, Frame, Result};
+
+/// The most structures of one kind (grids, BSP trees, octrees) an index keeps for
+/// different options.
+pub const KEPT_PER_STRUCTURE: usize = 4;
+
+/// How many times an index built each structure (each kept one counts once; a build
+/// refused by its budget does not count).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct IndexBuilds {
+    /// World-space triangles.
+    pub triangles: u32,
+    /// Bounding-volume hierarchies.
+    pub bvh: u32,
+    /// Uniform grids.
+    pub grid: u32,
+    /// BSP trees.
+    pub bsp: u32,
+    /// Octrees.
+    pub octree: u32,
+    /// Edge adjacencies.
+    pub adjacency: u32,
+}
+
+#[derive(Default)]
+struct Counters {
+    triangles: AtomicU32,
+    bvh: AtomicU32,
+    grid: AtomicU32,
+    bsp: AtomicU32,
+    octree: AtomicU32,
+    adjacency: AtomicU32,
+}
+
+/// A slot of a keyed cache: empty until its build succeeds.
+type Slot<T> = Arc<Mutex<Option<Arc<T>>>>;
+
+/// Structures kept by key (the options they were built with), the newest last.
+struct Keyed<K, T> {
+    slots: Mutex<Vec<(K, Slot<T>)>>,
+}
+
+impl<K, T> Default for Keyed<K, T> {
+    fn default() -> Self {
+        Keyed {
+            slots: Mutex::new(Vec::new()),
+        }
+    }
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    // A build that panicked left no structure behind; the cache itself stays valid.
+    m.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+impl<K: PartialEq, T> Keyed<K, T> {
+    /// The slot of `key`, made (and the oldest dropped past the cap) if new.
+    fn slot(&self, key: K) -> Slot<T> {
+        let mut slots = lock(&self.slots);
+        if let Some((_, s)) = slots.iter().find(|(k, _)| *k == key) {
+            return Arc::clone(s);
+        }
+        if slots.len() >= KEPT_PER_STRUCTURE {
+            slots.remove(0);
+        }
+        let s: Slot<T> = Arc::default();
+        slots.push((key, Arc::clone(&s)));
+        s
+    }
+
+    /// The structure of `key`, built by `build` under the slot's lock if not kept yet
+    /// (other threads asking for the same key wait). An error is returned, not kept.
+    fn get_or_build(&self, key: K, build: impl FnOnce() -> Result<T>) -> Result<Arc<T>> {
+        let slot = self.slot(key);
+        let mut held = lock(&slot);
+        if let Some(t) = held.as_ref() {
+            return Ok(Arc::clone(t));
+        }
+        let t = Arc::new(build()?);
+        *held = Some(Arc::clone(&t));
+        Ok(t)
+    }
+
+    /// As [`Self::get_or_build`], with the build run outside any lock (for builds that
+    /// run on rayon's pool); a structure kept meanwhile by another thread wins.
+    fn get_or_build_unlocked(
+        &self,
+        key: K,
+        build: impl FnOnce() -> Result<T>,
+    ) -> Result<(Arc<T>, bool)> {
+        let slot = self.slot(key);
+        if let Some(t) = lock(&slot).as_ref() {
+            return Ok((Arc::clone(t), false));
+        }
+        let t = Arc::new(build()?);
+        let mut held = lock(&slot);
+        if let Some(kept) = held.as_ref() {
+            return Ok((Arc::clone(kept), false));
+        }
+        *held = Some(Arc::clone(&t));
+        Ok((t, true))
+    }
+}
+
+/// The structures of one scene, each built once on first use and shared by every view
+/// and thread. See the [module documentation](self).
+pub struct SceneIndex<'s> {
+    scene: &'s Scene,
+    triangles: OnceLock<(SceneTriangles, f64)>,
+    bvh: OnceLock<Bvh>,
+    adjacency: OnceLock<Vec<EdgeAdjacency>>,
+    grids: Keyed<(GridOptions, u64), UniformGrid>,
+    bsp: Keyed<BspOptions, BspTree>,
+    octrees: Keyed<(u32, u64), Octree>,
+    counters: Counters,
+}
+
+impl std::fmt::Debug for SceneIndex<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SceneIndex")
+            .field("objects", &self.scene.objects().len())
+            .field("builds", &self.builds())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'s> SceneIndex<'s> {
+    /// An index of `scene` with nothing built yet (cheap: structures are built on first
+    /// use).
+    #[must_use]
+    pub fn new(scene: &'s Scene) -> Self {
+        SceneIndex {
+            scene,
+            triangles: OnceLock::new(),
+            bvh: OnceLock::new(),
+            adjacency: OnceLock::new(),
+            grids: Keyed::default(),
+            bsp: Keyed::default(),
+            octrees: Keyed::default(),
+            counters: Counters::default(),
+        }
+    }
+
+    /// The scene.
+    #[must_use]
+    pub fn scene(&self) -> &'s Scene {
+        self.scene
+    }
+
+    /// How many times each structure was built.
+    #[must_use]
+    pub fn builds(&self) -> IndexBuilds {
+        let c = &self.counters;
+        let n = |a: &AtomicU32| a.load(Ordering::Relaxed);
+        IndexBuilds {
+            triangles: n(&c.triangles),
+            bvh: n(&c.bvh),
+            grid: n(&c.grid),
+            bsp: n(&c.bsp),
+            octree: n(&c.octree),
+            adjacency: n(&c.adjacency),
+        }
+    }
+
+    /// The scene's world-space triangles, in scene order (built once).
+    pub fn triangles(&self) -> &SceneTriangles {
+        &self.triangles_timed().0
+    }
+
+    /// The triangles and the milliseconds their build took.
+    pub(crate) fn triangles_timed(&self) -> &(SceneTriangles, f64) {
+        self.triangles.get_or_init(|| {
+            let start = Instant::now();
+            let t = SceneTriangles::new(self.scene);
+            self.counters.triangles.fetch_add(1, Ordering::Relaxed);
+            (t, start.elapsed().as_secs_f64() * 1e3)
+        })
+    }
+
+    /// The bounding-volume hierarchy over [`Self::triangles`] (default options; built
+    /// once).
+    pub fn bvh(&self) -> &Bvh {
+        self.bvh.get_or_init(|| {
+            let bvh = Bvh::build(self.triangles(), &BvhOptions::default());
+            self.counters.bvh.fetch_add(1, Ordering::Relaxed);
+            bvh
+        })
+    }
+
+    /// The edge adjacency of every object's mesh, in object order (built once).
+    pub fn edge_adjacency(&self) -> &[EdgeAdjacency] {
+        self.adjacency.get_or_init(|| {
+            let a = self
+                .scene
+                .objects()
+                .iter()
+                .map(|o| EdgeAdjacency::new(&o.mesh))
+                .collect();
+            self.counters.adjacency.fetch_add(1, Ordering::Relaxed);
+            a
+        })
+    }
+
+    /// The uniform grid over [`Self::triangles`] for these options, built under
+    /// `budget` the first time (see [`UniformGrid::build_with_budget`]), stopped by
+    /// `deadline` (see [`crate::work`]; a stopped build is not kept).
+    pub fn grid(
+        &self,
+        options: &GridOptions,
+        budget: &MemoryBudget,
+        deadline: &crate::work::Deadline,
+    ) -> Result<Arc<UniformGrid>> {
+        self.grids.get_or_build((*options, budget.limit()), || {
+            let g = UniformGrid::build_until(self.triangles(), options, budget, deadline)?;
+            self.counters.grid.fetch_add(1, Ordering::Relaxed);
+            Ok(g)
+        })
+    }
+
+    /// The BSP tree of the scene for these options (their memory limit included),
+    /// built the first time (see [`BspTree::build`]), stopped by `deadline` (see
+    /// [`crate::work`]; a stopped build is not kept).
+    pub fn bsp(
+        &self,
+        options: &BspOptions,
+        deadline: &crate::work::Deadline,
+    ) -> Result<Arc<BspTree>> {
+        self.bsp.get_or_build(*options, || {
+            let t = BspTree::build_until(self.scene, options, deadline)?;
+            self.counters.bsp.fetch_add(1, Ordering::Relaxed);
+            Ok(t)
+        })
+    }
+
+    /// The octree of the scene at `depth`, checked against the budget of `options`
+    /// before it is built the first time ([`surface::octree::check_budget`]), stopped
+    /// by the deadline of `options` (see [`crate::work`]; a stopped build is not kept).
+    pub fn octree(&self, depth: u32, options: &RenderOptions) -> Result<Arc<Octree>> {
+        let (tree, built) =
+            self.octrees
+                .get_or_build_unlocked((depth, options.budget().limit()), || {
+                    let probe = options.clone().with_octree_depth(depth);
+                    surface::octree::check_budget(self.scene, &probe)?;
+                    Octree::from_scene_until(self.scene, depth, &options.deadline)
+                })?;
+        if built {
+            self.counters.octree.fetch_add(1, Ordering::Relaxed);
+        }
+        Ok(tree)
+    }
+
+    /// Renders a prepared view of this index's scene with an algorithm, taking the
+    /// structures it needs from the index (built on first use). The same frame and
+    /// stats as [`surface::render`], which builds them for its one call.
+    pub fn render(
+        &self,
+        view: &PreparedView<'_>,
+        algorithm: Algorithm,
+        options: &RenderOptions,
+    ) -> Result<(Frame, Stats)> {
+        self.check_scene(view)?;
+        surface::render_indexed(self, algorithm, view, options)
+    }
+
+    /// Renders a view of this index's scene with an algorithm. The algorithms that
+    /// need no screen polygons (the ray casters, BSP, octree:
+    /// [`Algorithm::needs_polygons`]) read only the view's decisions; for the others
+    /// the polygons are built for this call (to render several of them, build them
+    /// once with [`View::into_prepared`] and call [`Self::render`]).
+    pub fn render_view(
+        &self,
+        view: &View<'_>,
+        algorithm: Algorithm,
+        options: &RenderOptions,
+    ) -> Result<(Frame, Stats)> {
+        self.check_scene(view)?;
+        if algorithm.needs_polygons() {
+            return self.render(&view.clone().into_prepared(), algorithm, options);
+        }
+        surface::render_view_indexed(self, algorithm, view, options)
+    }
+
+    fn check_scene(&self, view: &View<'_>) -> Result<()> {
+        if std::ptr::eq(view.scene(), self.scene) {
+            Ok(())
+        } else {
+            Err(Error::option(
+                "view",
+                "the view is of another scene than the index's",
+            ))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// No time limit.
+    const NO_LIMIT: crate::work::Deadline = crate::work::Deadline::NONE;
+    use crate::scene::{Camera, Viewport, demo};
+    use crate::view::PrepareOptions;
+    use glam::DVec3;
+
+    fn views(scene: &Scene) -> Vec<View<'_>> {
+        let vp = Viewport::new(48, 36).unwrap();
+        [DVec3::new(3., 2., 4.), DVec3::new(-4., 1., 3.)]
+            .into_iter()
+            .map(|eye| {
+                let cam = Camera::perspective(eye, DVec3::ZERO, DVec3::Y, 50.0, 0.1, 30.0);
+                View::new(scene, &cam, vp, &PrepareOptions::default()).unwrap()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn each_structure_is_built_once_for_two_views() {
+        let scene = demo::cube();
+        let index = SceneIndex::new(&scene);
+        assert_eq!(index.builds(), IndexBuilds::default());
+        let ro = RenderOptions::default();
+        for view in views(&scene) {
+            for a in [Algorithm::RaycastBvh, Algorithm::Bsp, Algorithm::Octree] {
+                index.render_view(&view, a, &ro).unwrap();
+            }
+        }
+        let b = index.builds();
+        assert_eq!((b.triangles, b.bvh, b.bsp, b.octree), (1, 1, 1, 1));
+        assert!(std::ptr::eq(index.bvh(), index.bvh()));
+        assert!(std::ptr::eq(index.triangles(), index.triangles()));
+        let bsp = BspOptions::default().with_memory_limit(ro.memory_limit);
+        assert!(Arc::ptr_eq(
+            &index.bsp(&bsp, &NO_LIMIT).unwrap(),
+            &index.bsp(&bsp, &NO_LIMIT).unwrap()
+        ));
+        let o1 = index.octree(3, &ro).unwrap();
+        assert!(Arc::ptr_eq(&o1, &index.octree(3, &ro).unwrap()));
+        assert_eq!(index.builds().octree, 2, "depth 3 is a second octree");
+        assert!(std::ptr::eq(index.edge_adjacency(), index.edge_adjacency()));
+        assert_eq!(index.builds().adjacency, 1);
+    }
+
+    #[test]
+    fn structures_built_by_other_options_are_kept_apart() {
+        let scene = demo::cube();
+        let index = SceneIndex::new(&scene);
+        let a = index.bsp(&BspOptions::default(), &NO_LIMIT).unwrap();
+        let b = index.bsp(&BspOptions::default().with_seed(7), &NO_LIMIT).unwrap();
+        assert!(!Arc::ptr_eq(&a, &b));
+        assert!(Arc::ptr_eq(&a, &index.bsp(&BspOptions::default(), &NO_LIMIT).unwrap()));
+        assert_eq!(index.builds().bsp, 2);
+        let budget = MemoryBudget::from_option(None);
+        let g1 = index.grid(&GridOptions::default(), &budget, &NO_LIMIT).unwrap();
+        let g2 = index
+            .grid(&GridOptions::default().with_density(8.0), &budget, &NO_LIMIT)
+            .unwrap();
+        assert!(!Arc::ptr_eq(&g1, &g2));
+        assert!(Arc::ptr_eq(
+            &g1,
+            &index.grid(&GridOptions::default(), &budget, &NO_LIMIT).unwrap()
+        ));
+        assert_eq!(index.builds().grid, 2);
+    }
+
+    #[test]
+    fn a_build_over_its_budget_is_refused_and_not_kept() {
+        let scene = demo::cube();
+        let index = SceneIndex::new(&scene);
+        let tiny = RenderOptions::default().with_memory_limit(Some(64));
+        let err = index.octree(6, &tiny).unwrap_err();
+        assert!(err.to_string().contains("memory budget"), "{err}");
+        assert_eq!(index.builds().octree, 0);
+        // The same options fail again (nothing was kept as a success)...
+        assert!(index.octree(6, &tiny).is_err());
+        // ...and a budget that allows it builds it.
+        index.octree(6, &RenderOptions::default()).unwrap();
+        assert_eq!(index.builds().octree, 1);
+        let tiny_bsp = BspOptions::default().with_memory_limit(Some(64));
+        assert!(index.bsp(&tiny_bsp, &NO_LIMIT).is_err());
+        assert!(index.bsp(&tiny_bsp, &NO_LIMIT).is_err());
+        assert_eq!(index.builds().bsp, 0);
+    }
+
+    #[test]
+    fn threads_share_one_build() {
+        let scene = demo::default_scene();
+        let index = SceneIndex::new(&scene);
+        let views = views(&scene);
+        let ro = RenderOptions::default();
+        let frames: Vec<Vec<u32>> = std::thread::scope(|s| {
+            let handles: Vec<_> = (0..4)
+                .map(|i| {
+                    let (index, view, ro) = (&index, &views[i % 2], &ro);
+                    s.spawn(move || {
+                        let (bvh, _) = index.render_view(view, Algorithm::RaycastBvh, ro).unwrap();
+                        let (bsp, _) = index.render_view(view, Algorithm::Bsp, ro).unwrap();
+                        assert_eq!(bvh.ids, bsp.ids);
+                        bvh.ids
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        assert_eq!(frames[0], frames[2]);
+        assert_eq!(frames[1], frames[3]);
+        let b = index.builds();
+        assert_eq!((b.triangles, b.bvh, b.bsp), (1, 1, 1));
+    }
+
+    #[test]
+    fn a_view_of_another_scene_is_refused() {
+        let (a, b) = (demo::cube(), demo::cube());
+        let index = SceneIndex::new(&a);
+        let view = &views(&b)[0];
+        assert!(
+            index
+                .render_view(view, Algorithm::RaycastBvh, &RenderOptions::default())
+                .is_err()
+        );
+    }
+}
