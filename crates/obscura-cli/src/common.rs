@@ -534,8 +534,9 @@ pub fn progress_bar(name: &str) -> (indicatif::ProgressBar, obscura::surface::Pr
 /// small dense object in a large scene, the uniform grid's known weakness), from the
 /// stats of `raycast-grid`; `None` for other stats and balanced grids.
 pub fn grid_note(stats: &obscura::Stats) -> Option<String> {
-    let largest = stats.get("largest_cell")?;
-    let average = stats.get("refs_per_cell")?;
+    let grid = stats.raycast_grid()?;
+    let largest = grid.largest_cell as f64;
+    let average = grid.refs_per_cell;
     (largest >= 4096.0 && largest >= 1000.0 * average.max(1.0)).then(|| {
         format!(
             "one cell of the uniform grid holds {largest} triangles ({average:.1} on \

@@ -22,6 +22,7 @@ pub mod octree;
 mod paint;
 pub mod raycast;
 pub mod scanline;
+pub mod stats;
 pub mod warnock;
 pub mod zbuffer;
 
@@ -30,12 +31,12 @@ use std::str::FromStr;
 use std::sync::Arc;
 use std::time::Instant;
 
-use serde::ser::{Serialize, SerializeMap, Serializer};
-
 use crate::geom::BoundsKind;
 use crate::raster::FillRule;
 use crate::view::PreparedView;
 use crate::{Error, Frame, Result};
+
+pub use stats::{AlgorithmStats, Stats};
 
 /// A hidden-surface algorithm.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -236,47 +237,8 @@ impl RenderOptions {
     }
 }
 
-/// Named numbers that show how an algorithm worked (pixels tested, BSP splits,
-/// Warnock windows per rule...), in insertion order.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Stats {
-    /// `(name, value)` pairs.
-    pub entries: Vec<(String, f64)>,
-}
-
-impl Stats {
-    /// Sets a value (replacing an earlier one of the same name).
-    pub fn set(&mut self, name: &str, value: f64) {
-        match self.entries.iter_mut().find(|(k, _)| k == name) {
-            Some(e) => e.1 = value,
-            None => self.entries.push((name.to_string(), value)),
-        }
-    }
-
-    /// Adds to a value (starting from 0).
-    pub fn add(&mut self, name: &str, value: f64) {
-        let old = self.get(name).unwrap_or(0.0);
-        self.set(name, old + value);
-    }
-
-    /// A value by name.
-    #[must_use]
-    pub fn get(&self, name: &str) -> Option<f64> {
-        self.entries.iter().find(|(k, _)| k == name).map(|e| e.1)
-    }
-}
-
-impl Serialize for Stats {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let mut m = s.serialize_map(Some(self.entries.len()))?;
-        for (k, v) in &self.entries {
-            m.serialize_entry(k, v)?;
-        }
-        m.end()
-    }
-}
-
-/// Renders a prepared view with an algorithm. The stats end with `time_ms`.
+/// Renders a prepared view with an algorithm: the frame, and the algorithm's
+/// [`AlgorithmStats`] with the milliseconds of the call (listed last, as `time_ms`).
 ///
 /// ```
 /// use obscura::{scene::{demo, Viewport}, view::{prepare, PrepareOptions}};
@@ -286,7 +248,8 @@ impl Serialize for Stats {
 /// let view = prepare(&scene, &scene.default_camera(vp.aspect()), vp, &PrepareOptions::default()).unwrap();
 /// let (frame, stats) = render(Algorithm::ZBuffer, &view, &RenderOptions::default()).unwrap();
 /// assert!(frame.covered_pixels() > 0);
-/// assert!(stats.get("time_ms").is_some());
+/// assert!(stats.zbuffer().unwrap().pixels_written > 0);
+/// assert!(stats.time_ms >= 0.0);
 /// ```
 pub fn render(
     algorithm: Algorithm,
@@ -295,23 +258,30 @@ pub fn render(
 ) -> Result<(Frame, Stats)> {
     let start = Instant::now();
     check_budget(algorithm, view, options)?;
-    let (frame, mut stats) = match algorithm {
-        Algorithm::ZBuffer => zbuffer::render(view, options),
-        Algorithm::Scanline => scanline::render(view, options),
-        Algorithm::DepthSort => depth_sort::render(view, options),
-        Algorithm::DepthSortMatrix => depth_sort::render_matrix(view, options),
-        Algorithm::Bsp => bsp::render(view, options),
-        Algorithm::Warnock => warnock::render(view, options),
+    use AlgorithmStats as S;
+    let (frame, stats) = match algorithm {
+        Algorithm::ZBuffer => zbuffer::render(view, options).map(|(f, s)| (f, S::ZBuffer(s))),
+        Algorithm::Scanline => scanline::render(view, options).map(|(f, s)| (f, S::Scanline(s))),
+        Algorithm::DepthSort => {
+            depth_sort::render(view, options).map(|(f, s)| (f, S::DepthSort(s)))
+        }
+        Algorithm::DepthSortMatrix => {
+            depth_sort::render_matrix(view, options).map(|(f, s)| (f, S::DepthSortMatrix(s)))
+        }
+        Algorithm::Bsp => bsp::render(view, options).map(|(f, s)| (f, S::Bsp(s))),
+        Algorithm::Warnock => warnock::render(view, options).map(|(f, s)| (f, S::Warnock(s))),
         Algorithm::Raycast => raycast::render(view, raycast::Acceleration::BruteForce, options),
         Algorithm::RaycastBounds => {
             raycast::render(view, raycast::Acceleration::Bounds(options.bounds), options)
         }
         Algorithm::RaycastBvh => raycast::render(view, raycast::Acceleration::Bvh, options),
         Algorithm::RaycastGrid => raycast::render(view, raycast::Acceleration::Grid, options),
-        Algorithm::Octree => octree::render(view, options),
+        Algorithm::Octree => octree::render(view, options).map(|(f, s)| (f, S::Octree(s))),
     }?;
-    stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
-    Ok((frame, stats))
+    Ok((
+        frame,
+        Stats::new(stats, start.elapsed().as_secs_f64() * 1e3),
+    ))
 }
 
 /// The structure named by the budget error of a frame and its per-pixel buffers.
