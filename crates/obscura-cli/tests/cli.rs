@@ -1553,7 +1553,15 @@ fn every_algorithm_reports_its_full_list_of_stats() {
     for (algo, expected) in STAT_KEYS {
         let mut args = vec!["render"];
         args.extend(common);
-        args.extend(["--algo", algo, "--stats", "--stats-json", "s.json", "-o", "r.png"]);
+        args.extend([
+            "--algo",
+            algo,
+            "--stats",
+            "--stats-json",
+            "s.json",
+            "-o",
+            "r.png",
+        ]);
         let o = obscura(&args, &dir);
         assert!(o.status.success(), "{algo}: {}", text(&o));
         // `--stats`: one indented row per stat after the algorithm's row, in order.
@@ -1614,6 +1622,31 @@ fn every_algorithm_reports_its_full_list_of_stats() {
             .map(|kv| kv.split('=').next().unwrap())
             .collect();
         assert_eq!(shown, expected[..5], "{algo}: {line}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn library_parameter_errors_are_named_by_their_cli_flags() {
+    // The library names its parameters (`RenderOptions::bounds`...); the CLI's
+    // messages name the flag the user gave.
+    let dir = tempdir("parameter-flags");
+    for (args, flag, library) in [
+        (
+            ["render", "demo:cube", "--bounds", "cone"],
+            "--bounds",
+            "RenderOptions::bounds",
+        ),
+        (
+            ["render", "demo:cube", "--bsp-traversal", "sideways"],
+            "--bsp-traversal",
+            "BspOptions::traversal",
+        ),
+    ] {
+        let o = obscura(&args, &dir);
+        assert!(!o.status.success());
+        let t = text(&o);
+        assert!(t.contains(flag) && !t.contains(library), "{args:?}: {t}");
     }
     std::fs::remove_dir_all(&dir).ok();
 }

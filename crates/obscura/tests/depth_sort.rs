@@ -45,7 +45,9 @@ fn newell(stats: &Stats) -> &DepthSortStats {
 
 /// The covering matrix's own figures in the stats of a render.
 fn matrix(stats: &Stats) -> &DepthSortMatrixStats {
-    stats.depth_sort_matrix().expect("the matrix depth sort's stats")
+    stats
+        .depth_sort_matrix()
+        .expect("the matrix depth sort's stats")
 }
 
 /// The figures both depth sorts report.
@@ -556,10 +558,7 @@ fn conflicts_left_past_the_split_budget_still_give_the_zbuffer_image() {
     let v = view(&scene, &scene.default_camera(1.0), 256, 256);
     for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
         let (frame, stats) = render(algorithm, &v, &RenderOptions::default()).unwrap();
-        assert!(
-            shared(&stats).unresolved > 0,
-            "{algorithm:?}: {stats:?}"
-        );
+        assert!(shared(&stats).unresolved > 0, "{algorithm:?}: {stats:?}");
         assert_like_zbuffer(&frame, &v, 0.999, &format!("{algorithm:?}"));
     }
 }
@@ -577,10 +576,7 @@ fn thousands_of_slivers_stop_sorting_at_the_comparison_budget() {
             shared(&stats).comparisons as f64 <= budget * 1.01,
             "{algorithm:?}: {stats:?}"
         );
-        assert!(
-            shared(&stats).unsorted > 0,
-            "{algorithm:?}: {stats:?}"
-        );
+        assert!(shared(&stats).unsorted > 0, "{algorithm:?}: {stats:?}");
         assert_like_zbuffer(&frame, &v, 0.999, &format!("{algorithm:?}"));
     }
 }

@@ -292,7 +292,10 @@ fn bounding_volumes_agree_and_save_tests() {
         assert_eq!(s.bound_tests, rays * 37);
         assert!(s.bound_hits < s.bound_tests, "{kind:?}");
         // Brute force's count is every front triangle for every ray.
-        let brute_tests = brute_stats.ray().expect("a ray caster's stats").triangle_tests;
+        let brute_tests = brute_stats
+            .ray()
+            .expect("a ray caster's stats")
+            .triangle_tests;
         assert_eq!(s.triangle_tests_brute_force, brute_tests);
         assert_eq!(
             s.triangle_tests_saved,
@@ -930,17 +933,26 @@ fn stats_report_the_figures_of_each_variant() {
     // Every figure of every variant, by its field (a missing one does not compile;
     // the CLI's tests check the keys).
     for (a, _, s) in &out {
-        let ray = s.algorithm.ray().unwrap_or_else(|| panic!("{a}: no ray stats"));
+        let ray = s
+            .algorithm
+            .ray()
+            .unwrap_or_else(|| panic!("{a}: no ray stats"));
         assert_eq!(ray.rays, 1200, "{a}");
         assert!(ray.hits > 0 && ray.hits <= ray.rays, "{a}");
         assert!(ray.triangle_tests > 0, "{a}");
         assert!(ray.trace_ms >= 0.0 && ray.mrays_per_s >= 0.0, "{a}");
         assert!(s.time_ms >= ray.trace_ms, "{a}");
     }
-    let bvh = frame_of(&out, Algorithm::RaycastBvh).1.raycast_bvh().unwrap();
+    let bvh = frame_of(&out, Algorithm::RaycastBvh)
+        .1
+        .raycast_bvh()
+        .unwrap();
     assert!(bvh.build_ms >= 0.0 && bvh.nodes >= 1 && bvh.leaves >= 1 && bvh.depth >= 1);
     assert!(bvh.triangle_tests_per_ray > 0.0 && bvh.node_visits_per_ray > 0.0);
-    let grid = frame_of(&out, Algorithm::RaycastGrid).1.raycast_grid().unwrap();
+    let grid = frame_of(&out, Algorithm::RaycastGrid)
+        .1
+        .raycast_grid()
+        .unwrap();
     assert!(grid.cells >= 1 && grid.refs_per_cell > 0.0 && grid.cells_per_ray > 0.0);
     assert!(grid.build_ms >= 0.0);
     // The accelerations test far fewer triangles than brute force.

@@ -7,8 +7,8 @@ use glam::DVec3;
 use hsr_scenes::{Case, scene_of};
 use obscura::scene::Camera;
 use obscura::surface::scanline::{self, SpanDecision};
-use obscura::surface::{Algorithm, RenderOptions};
 use obscura::surface::stats::ScanlineStats;
+use obscura::surface::{Algorithm, RenderOptions};
 use obscura::{BACKGROUND, Stats, prepare};
 
 /// The scanline's own figures in the stats of a render.
@@ -259,8 +259,7 @@ fn coherence_skips_comparisons_on_repeated_rows() {
     assert_eq!(sl(&stats).spans_by_coherence, 2 * 38);
     assert_eq!(sl(&stats).spans_by_kept_nearest, 40);
     // Skipped per reuse: 3 (k - 1) for k faces: 3 + 6.
-    assert_eq!(sl(&stats).comparisons_skipped_by_coherence, 9 * 38
-    );
+    assert_eq!(sl(&stats).comparisons_skipped_by_coherence, 9 * 38);
     assert_eq!(sl(&stats).spans_without_comparison, 2 * 40);
     assert_eq!(sl(&stats).spans, 5 * 40);
 }

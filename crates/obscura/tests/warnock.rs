@@ -8,9 +8,9 @@ use hsr_scenes::{Case, scene_of};
 use obscura::raster::{FillRule, PixelRect, PolygonCoverage};
 use obscura::scene::Camera;
 use obscura::scene::demo::SplitMix64;
+use obscura::surface::stats::WarnockStats;
 use obscura::surface::warnock::{Relation, classify};
 use obscura::surface::{Algorithm, RenderOptions};
-use obscura::surface::stats::WarnockStats;
 use obscura::{BACKGROUND, Stats, prepare};
 
 const ALGO: Algorithm = Algorithm::Warnock;

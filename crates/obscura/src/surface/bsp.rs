@@ -48,8 +48,8 @@ use crate::accel::bsp::{BspTraversal, BspTree, BspVisitor, Viewpoint};
 use crate::clip::outcode_homogeneous;
 use crate::cull::frustum::Containment;
 use crate::geom::newell_normal;
-use crate::surface::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
 use crate::surface::RenderOptions;
+use crate::surface::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
 use crate::surface::stats::BspStats;
 use crate::view::{ModelView, PreparedView, ViewTransform, ViewVertex};
 use crate::{Error, Frame, Result};
@@ -339,7 +339,7 @@ pub fn render_with_tree(
 ) -> Result<(Frame, BspStats)> {
     if !tree.matches(view.scene()) {
         return Err(Error::option(
-            "--algo bsp",
+            "bsp::render_with_tree tree",
             "the BSP tree was built from another scene (objects, vertices or face ids differ)",
         ));
     }

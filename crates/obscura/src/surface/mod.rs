@@ -40,6 +40,7 @@ pub use stats::{AlgorithmStats, Stats};
 
 /// A hidden-surface algorithm.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Algorithm {
     /// Z-buffer: the reference.
     ZBuffer,
@@ -121,7 +122,7 @@ impl FromStr for Algorithm {
             .find(|a| a.name() == s)
             .ok_or_else(|| {
                 Error::option(
-                    "--algo",
+                    "algorithm",
                     format!(
                         "unknown algorithm \"{s}\" (known: {})",
                         Algorithm::ALL.map(Algorithm::name).join(", ")
@@ -353,5 +354,27 @@ mod tests {
             assert_eq!(a.name().parse::<Algorithm>().unwrap(), a);
         }
         assert!("nope".parse::<Algorithm>().is_err());
+    }
+
+    #[test]
+    fn errors_name_library_parameters_not_cli_flags() {
+        let errors = [
+            "nope".parse::<Algorithm>().unwrap_err(),
+            "nope".parse::<BoundsKind>().unwrap_err(),
+            "nope"
+                .parse::<crate::accel::bsp::BspTraversal>()
+                .unwrap_err(),
+            crate::accel::octree::check_depth(crate::accel::octree::MAX_DEPTH + 1).unwrap_err(),
+        ];
+        let named = [
+            "algorithm",
+            "RenderOptions::bounds",
+            "BspOptions::traversal",
+            "RenderOptions::octree_depth",
+        ];
+        for (e, name) in errors.iter().zip(named) {
+            let text = e.to_string();
+            assert!(text.contains(name) && !text.contains("--"), "{text}");
+        }
     }
 }

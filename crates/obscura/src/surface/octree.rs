@@ -112,7 +112,7 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
         build_ms,
         trace_ms,
         rays,
-        nodes_visited: visited as u64,
+        nodes_visited: visited,
         nodes_visited_per_ray: visited as f64 / rays as f64,
         pixels_covered: frame.covered_pixels() as u64,
         near_faces: near.triangles.len() as u64,

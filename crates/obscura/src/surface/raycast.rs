@@ -37,7 +37,9 @@
 //! frame; they differ only in how many tests they need.
 //!
 //! - Input: a [`PreparedView`] (for its scene, camera, viewport and back-face mode).
-//!   Output: a [`Frame`] (face id and eye-space depth `t` as `f32`) and [`Stats`].
+//!   Output: a [`Frame`] (face id and eye-space depth `t` as `f32`) and the variant's
+//!   stats ([`RaycastStats`], [`RaycastBoundsStats`], [`RaycastBvhStats`],
+//!   [`RaycastGridStats`]).
 //! - Complexity: brute force O(p T) for p pixels and T triangles; bounds O(p (K + T_hit))
 //!   for K objects; BVH about O(p log T); grid O(p (cells per ray + refs per cell)).
 //! - Order and parallelism: pixels are traced in 8x8 tiles (neighbouring rays visit the
@@ -62,11 +64,10 @@ use crate::accel::triangles::{
     AxisOrder, ClosestHit, HitContext, PrimaryRays, SceneTriangles, WatertightRay, WithAxisOrder,
 };
 use crate::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb, RaySlabs, Sphere};
-use crate::surface::stats::{
-    AlgorithmStats, RayStats, RaycastBoundsStats, RaycastBvhStats, RaycastGridStats,
-    RaycastStats,
-};
 use crate::surface::RenderOptions;
+use crate::surface::stats::{
+    AlgorithmStats, RayStats, RaycastBoundsStats, RaycastBvhStats, RaycastGridStats, RaycastStats,
+};
 use crate::view::PreparedView;
 use crate::{Frame, Result};
 
@@ -136,7 +137,10 @@ pub fn render(
     Ok(match acceleration {
         Acceleration::BruteForce => {
             let (frame, s) = render_brute_force(view, &triangles, options)?;
-            (frame, AlgorithmStats::Raycast(RaycastStats { triangles_ms, ..s }))
+            (
+                frame,
+                AlgorithmStats::Raycast(RaycastStats { triangles_ms, ..s }),
+            )
         }
         Acceleration::Bounds(kind) => {
             let (frame, s) = render_bounds(view, &triangles, kind, options)?;
@@ -146,7 +150,10 @@ pub fn render(
         Acceleration::Bvh => {
             let bvh = Bvh::build(&triangles, &BvhOptions::default());
             let (frame, s) = render_bvh(view, &triangles, &bvh, options)?;
-            (frame, AlgorithmStats::RaycastBvh(RaycastBvhStats { triangles_ms, ..s }))
+            (
+                frame,
+                AlgorithmStats::RaycastBvh(RaycastBvhStats { triangles_ms, ..s }),
+            )
         }
         Acceleration::Grid => {
             // Cells sized for the rounding of this view's rays (see `accel::grid`).
@@ -157,7 +164,10 @@ pub fn render(
                 &options.budget(),
             )?;
             let (frame, s) = render_grid(view, &triangles, &grid, options)?;
-            (frame, AlgorithmStats::RaycastGrid(RaycastGridStats { triangles_ms, ..s }))
+            (
+                frame,
+                AlgorithmStats::RaycastGrid(RaycastGridStats { triangles_ms, ..s }),
+            )
         }
     })
 }

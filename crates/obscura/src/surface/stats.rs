@@ -691,7 +691,12 @@ mod tests {
         let keys = |s: &ZBufferStats| s.entries().iter().map(|e| e.0).collect::<Vec<_>>();
         assert_eq!(
             keys(&z),
-            ["polygons", "polygons_drawn", "pixels_tested", "pixels_written"]
+            [
+                "polygons",
+                "polygons_drawn",
+                "pixels_tested",
+                "pixels_written"
+            ]
         );
         z.fast = Some(ZBufferFastStats {
             big_polygons: 2,

@@ -46,10 +46,10 @@
 use crate::Result;
 use crate::frame::Frame;
 use crate::raster::{EdgeFunction, PixelRect, PolygonCoverage};
+use crate::surface::RenderOptions;
 use crate::surface::scanline::screen_faces::{
     ScreenFaces, corner_samples, fill_run, hides, intersect, set_pixel, stored_key, surely_nearer,
 };
-use crate::surface::RenderOptions;
 use crate::surface::stats::WarnockStats;
 use crate::view::{PreparedView, ViewTransform};
 

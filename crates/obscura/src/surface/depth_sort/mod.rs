@@ -92,11 +92,9 @@ mod matrix;
 mod newell;
 mod work;
 
-use crate::surface::paint::{PaintMode, Painter};
 use crate::surface::RenderOptions;
-use crate::surface::stats::{
-    AlgorithmStats, DepthSortMatrixStats, DepthSortStats, PaintStats,
-};
+use crate::surface::paint::{PaintMode, Painter};
+use crate::surface::stats::{AlgorithmStats, DepthSortMatrixStats, DepthSortStats, PaintStats};
 use crate::view::{PreparedView, ViewVertex};
 use crate::{Frame, Result};
 
@@ -184,49 +182,49 @@ impl Outcome {
     /// The stats of the Newell variant.
     fn newell(&self, paint: Option<PaintStats>) -> DepthSortStats {
         DepthSortStats {
-        polygons: self.view_polygons as u64,
-        polygons_sorted: self.sorted as u64,
-        comparisons: self.c.comparisons,
-        decided_depth: self.c.depth,
-        decided_same_face: self.c.same_face,
-        decided_test1_x: self.c.test1,
-        decided_test2_y: self.c.test2,
-        decided_test3: self.c.test3,
-        decided_test4: self.c.test4,
-        decided_test5: self.c.test5,
-        decided_coplanar: self.c.coplanar,
-        decided_overlap_depth: self.c.overlap_depth,
-        swaps: self.c.swaps,
-        swap_test3: self.c.swap_test3,
-        swap_test4: self.c.swap_test4,
-        swap_overlap_depth: self.c.swap_overlap_depth,
-        cycles: self.c.cycles,
-        splits: self.c.splits,
-        unresolved: self.c.unresolved,
-        unsorted: self.c.unsorted,
-        paint,
+            polygons: self.view_polygons as u64,
+            polygons_sorted: self.sorted as u64,
+            comparisons: self.c.comparisons,
+            decided_depth: self.c.depth,
+            decided_same_face: self.c.same_face,
+            decided_test1_x: self.c.test1,
+            decided_test2_y: self.c.test2,
+            decided_test3: self.c.test3,
+            decided_test4: self.c.test4,
+            decided_test5: self.c.test5,
+            decided_coplanar: self.c.coplanar,
+            decided_overlap_depth: self.c.overlap_depth,
+            swaps: self.c.swaps,
+            swap_test3: self.c.swap_test3,
+            swap_test4: self.c.swap_test4,
+            swap_overlap_depth: self.c.swap_overlap_depth,
+            cycles: self.c.cycles,
+            splits: self.c.splits,
+            unresolved: self.c.unresolved,
+            unsorted: self.c.unsorted,
+            paint,
         }
     }
 
     /// The stats of the matrix variant.
     fn matrix(&self, paint: Option<PaintStats>) -> DepthSortMatrixStats {
         DepthSortMatrixStats {
-        polygons: self.view_polygons as u64,
-        polygons_sorted: self.sorted as u64,
-        comparisons: self.c.comparisons,
-        decided_same_face: self.c.same_face,
-        decided_test1_x: self.c.test1,
-        decided_test2_y: self.c.test2,
-        decided_planes_both_orders: self.c.test3,
-        decided_test5: self.c.test5,
-        decided_coplanar: self.c.coplanar,
-        decided_overlap_depth: self.c.overlap_depth,
-        relations: self.c.relations,
-        cycles_broken: self.c.cycles,
-        splits: self.c.splits,
-        unresolved: self.c.unresolved,
-        unsorted: self.c.unsorted,
-        paint,
+            polygons: self.view_polygons as u64,
+            polygons_sorted: self.sorted as u64,
+            comparisons: self.c.comparisons,
+            decided_same_face: self.c.same_face,
+            decided_test1_x: self.c.test1,
+            decided_test2_y: self.c.test2,
+            decided_planes_both_orders: self.c.test3,
+            decided_test5: self.c.test5,
+            decided_coplanar: self.c.coplanar,
+            decided_overlap_depth: self.c.overlap_depth,
+            relations: self.c.relations,
+            cycles_broken: self.c.cycles,
+            splits: self.c.splits,
+            unresolved: self.c.unresolved,
+            unsorted: self.c.unsorted,
+            paint,
         }
     }
 }
@@ -326,10 +324,7 @@ fn order_variant(view: &PreparedView<'_>, options: &RenderOptions, variant: Vari
 /// assert_eq!(frame.ids, z.ids);
 /// assert!(stats.depth_sort().unwrap().splits > 0); // the demo's panels interpenetrate
 /// ```
-pub fn render(
-    view: &PreparedView<'_>,
-    options: &RenderOptions,
-) -> Result<(Frame, DepthSortStats)> {
+pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, DepthSortStats)> {
     let (frame, outcome, paint) = render_variant(view, options, Variant::Newell)?;
     Ok((frame, outcome.newell(Some(paint))))
 }

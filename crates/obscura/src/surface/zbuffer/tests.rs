@@ -130,7 +130,10 @@ fn assert_close(
         assert!(close, "{what}: depth {x} at {k}, the reference {y}");
     }
     assert_eq!(a.1.polygons, b.1.polygons, "{what}: polygons");
-    assert_eq!(a.1.polygons_drawn, b.1.polygons_drawn, "{what}: polygons_drawn");
+    assert_eq!(
+        a.1.polygons_drawn, b.1.polygons_drawn,
+        "{what}: polygons_drawn"
+    );
     assert!(
         a.1.pixels_tested <= b.1.pixels_tested,
         "{what}: pixels tested"
