@@ -379,6 +379,6 @@ mod tests {
         )
         .unwrap();
         let e = render(&v, &RenderOptions::default().with_octree_depth(40)).unwrap_err();
-        assert!(e.to_string().contains("octree-depth"), "{e}");
+        assert!(e.to_string().contains("RenderOptions::octree_depth"), "{e}");
     }
 }
