@@ -264,11 +264,11 @@ pub fn parse_octree_depth(s: &str) -> std::result::Result<u32, String> {
 }
 
 pub fn parse_bounds(s: &str) -> std::result::Result<BoundsKind, String> {
-    s.parse().map_err(|e: obscura::Error| e.to_string())
+    s.parse().map_err(|e| cli_error(e).to_string())
 }
 
 pub fn parse_bsp_traversal(s: &str) -> std::result::Result<BspTraversal, String> {
-    s.parse().map_err(|e: obscura::Error| e.to_string())
+    s.parse().map_err(|e| cli_error(e).to_string())
 }
 
 /// The most worker threads `--threads` accepts: far more than any machine's cores (a
@@ -525,9 +525,29 @@ pub fn message(e: &Error) -> String {
 /// library's `memory_limit`.
 pub const MEMORY_LIMIT_FLAG: &str = "--memory-limit";
 
+/// The CLI's flags for the library parameters that errors name (the library names its
+/// own parameters, e.g. `RenderOptions::octree_depth`; the CLI's messages name the flag).
+pub const PARAMETER_FLAGS: [(&str, &str); 4] = [
+    ("RenderOptions::octree_depth", "--octree-depth"),
+    ("RenderOptions::bounds", "--bounds"),
+    ("BspOptions::traversal", "--bsp-traversal"),
+    ("algorithm", "--algo"),
+];
+
 /// An error as the CLI shows it: a budget error names `--memory-limit` instead of the
-/// library's `memory_limit`, and the BSP's fragment cap says how the flag lifts it.
+/// library's `memory_limit`, an invalid library parameter is named by its flag (see
+/// [`PARAMETER_FLAGS`]), and the BSP's fragment cap says how the flag lifts it.
 pub fn cli_error(e: Error) -> Error {
+    let e = match e {
+        Error::InvalidOption { option, reason } => {
+            let option = PARAMETER_FLAGS
+                .iter()
+                .find(|(parameter, _)| *parameter == option)
+                .map_or(option, |(_, flag)| (*flag).to_string());
+            Error::InvalidOption { option, reason }
+        }
+        other => other,
+    };
     match e {
         Error::InvalidOption { option, reason } if option == "bsp fragments" => {
             Error::InvalidOption {
@@ -604,8 +624,9 @@ pub fn progress_bar(name: &str) -> (indicatif::ProgressBar, obscura::surface::Pr
 /// small dense object in a large scene, the uniform grid's known weakness), from the
 /// stats of `raycast-grid`; `None` for other stats and balanced grids.
 pub fn grid_note(stats: &obscura::Stats) -> Option<String> {
-    let largest = stats.get("largest_cell")?;
-    let average = stats.get("refs_per_cell")?;
+    let grid = stats.raycast_grid()?;
+    let largest = grid.largest_cell as f64;
+    let average = grid.refs_per_cell;
     (largest >= 4096.0 && largest >= 1000.0 * average.max(1.0)).then(|| {
         format!(
             "one cell of the uniform grid holds {largest} triangles ({average:.1} on \

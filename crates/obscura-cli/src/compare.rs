@@ -62,9 +62,9 @@ struct Row {
 /// The stats worth a column: everything but the time, compactly.
 fn summary(stats: &Stats) -> String {
     stats
-        .entries
-        .iter()
-        .filter(|(k, _)| k != "time_ms")
+        .algorithm
+        .entries()
+        .into_iter()
         .take(5)
         .map(|(k, v)| {
             if v.fract() == 0.0 {

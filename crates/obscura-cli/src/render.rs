@@ -144,7 +144,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "load_ms": loaded.load_ms,
             "render_ms": render_ms,
             "prepare_ms": prepare_ms,
-            "algorithm_ms": stats.get("time_ms"),
+            "algorithm_ms": stats.time_ms,
             "covered_pixels": frame.covered_pixels(),
             "stages": stages.stages,
             "stats": stats,
@@ -184,7 +184,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
                 s.ms
             );
         }
-        let algo_ms = stats.get("time_ms").unwrap_or(0.0);
+        let algo_ms = stats.time_ms;
         outln!(
             "{:<48} {:>9} {:>12} {:>12} {:>9.2}",
             format!("visibility: {}", args.algo),
@@ -193,10 +193,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             frame.covered_pixels(),
             algo_ms
         );
-        for (k, v) in &stats.entries {
-            if k != "time_ms" {
-                outln!("  {k:<46} {v:>12}");
-            }
+        for (k, v) in stats.algorithm.entries() {
+            outln!("  {k:<46} {v:>12}");
         }
         outln!(
             "render_ms {render_ms:.2} (prepare {prepare_ms:.2}, {} {algo_ms:.2})",

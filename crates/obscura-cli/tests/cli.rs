@@ -1392,3 +1392,373 @@ fn compare_skips_what_passes_the_time_limit_and_shows_the_rest() {
         assert!(o.status.success(), "{limit}: {}", text(&o));
     }
 }
+
+/// Every key each algorithm reports, in the order `--stats` prints them, written out
+/// here on its own (not taken from the library), so that a stat removed, renamed or
+/// moved fails this test. `--stats-json` and `compare --json` add `time_ms`.
+const STAT_KEYS: [(&str, &[&str]); 11] = [
+    (
+        "zbuffer",
+        &[
+            "polygons",
+            "polygons_drawn",
+            "pixels_tested",
+            "pixels_written",
+            "big_polygons",
+            "setup_and_small_ms",
+            "binning_ms",
+            "tiles_ms",
+        ],
+    ),
+    (
+        "scanline",
+        &[
+            "polygons",
+            "edges",
+            "max_active_edges",
+            "max_active_faces",
+            "spans",
+            "spans_without_comparison",
+            "spans_decided_at_ends",
+            "spans_by_kept_nearest",
+            "faces_hidden_on_entering",
+            "spans_by_coherence",
+            "spans_per_pixel",
+            "depth_comparisons",
+            "comparisons_skipped_by_coherence",
+            "order_checks",
+            "orders_proven",
+            "crossing_corrections",
+            "span_fallbacks",
+            "table_ms",
+            "enter_ms",
+            "sweep_ms",
+            "sort_ms",
+            "walk_ms",
+        ],
+    ),
+    (
+        "depth-sort",
+        &[
+            "polygons",
+            "polygons_sorted",
+            "comparisons",
+            "decided_depth",
+            "decided_same_face",
+            "decided_test1_x",
+            "decided_test2_y",
+            "decided_test3",
+            "decided_test4",
+            "decided_test5",
+            "decided_coplanar",
+            "decided_overlap_depth",
+            "swaps",
+            "swap_test3",
+            "swap_test4",
+            "swap_overlap_depth",
+            "cycles",
+            "splits",
+            "unresolved",
+            "unsorted",
+            "polygons_painted",
+            "pixels_written",
+        ],
+    ),
+    (
+        "depth-sort-matrix",
+        &[
+            "polygons",
+            "polygons_sorted",
+            "comparisons",
+            "decided_same_face",
+            "decided_test1_x",
+            "decided_test2_y",
+            "decided_planes_both_orders",
+            "decided_test5",
+            "decided_coplanar",
+            "decided_overlap_depth",
+            "relations",
+            "cycles_broken",
+            "splits",
+            "unresolved",
+            "unsorted",
+            "polygons_painted",
+            "pixels_written",
+        ],
+    ),
+    (
+        "bsp",
+        &[
+            "bsp_nodes",
+            "bsp_fragments",
+            "bsp_splits",
+            "bsp_depth",
+            "build_ms",
+            "front_to_back",
+            "view_ms",
+            "fragments_visited",
+            "fragments_culled",
+            "fragments_outside",
+            "subtrees_hidden",
+            "subtrees_outside",
+            "fragments_painted",
+            "pixels_written",
+            "early_exit",
+            "visited_fraction",
+        ],
+    ),
+    (
+        "warnock",
+        &[
+            "polygons",
+            "windows",
+            "rule1",
+            "rule2",
+            "rule3",
+            "rule4",
+            "rule5",
+            "pixel_decisions",
+            "classifications",
+            "depth_comparisons",
+            "max_depth",
+        ],
+    ),
+    (
+        "raycast",
+        &[
+            "triangles",
+            "front_triangles",
+            "rays",
+            "hits",
+            "triangle_tests",
+            "trace_ms",
+            "mrays_per_s",
+            "triangle_tests_per_ray",
+            "triangles_ms",
+        ],
+    ),
+    (
+        "raycast-bounds",
+        &[
+            "triangles",
+            "front_triangles",
+            "rays",
+            "hits",
+            "triangle_tests",
+            "trace_ms",
+            "mrays_per_s",
+            "bounds_build_ms",
+            "objects",
+            "bound_tests",
+            "bound_hits",
+            "triangle_tests_brute_force",
+            "triangle_tests_saved",
+            "saved_fraction",
+            "triangles_ms",
+        ],
+    ),
+    (
+        "raycast-bvh",
+        &[
+            "triangles",
+            "front_triangles",
+            "rays",
+            "hits",
+            "triangle_tests",
+            "trace_ms",
+            "mrays_per_s",
+            "packet_node_visits_per_ray",
+            "build_ms",
+            "binary_nodes",
+            "binary_depth",
+            "nodes",
+            "leaves",
+            "depth",
+            "sah_cost",
+            "node_visits_per_ray",
+            "triangle_tests_per_ray",
+            "triangles_ms",
+        ],
+    ),
+    (
+        "raycast-grid",
+        &[
+            "triangles",
+            "front_triangles",
+            "rays",
+            "hits",
+            "triangle_tests",
+            "trace_ms",
+            "mrays_per_s",
+            "build_ms",
+            "cells",
+            "resolution_x",
+            "resolution_y",
+            "resolution_z",
+            "refs",
+            "refs_per_cell",
+            "empty_cells",
+            "largest_cell",
+            "cells_per_ray",
+            "triangle_tests_per_ray",
+            "mailbox_hits",
+            "hits_outside_cell",
+            "far_rays",
+            "triangles_ms",
+        ],
+    ),
+    (
+        "octree",
+        &[
+            "depth",
+            "voxels_per_side",
+            "triangles",
+            "nodes",
+            "nodes_before_merge",
+            "leaves_empty",
+            "leaves_full",
+            "leaves_partial",
+            "bytes_per_node",
+            "memory_bytes",
+            "sat_tests",
+            "components",
+            "inside_queries",
+            "triangles_ms",
+            "subdivide_ms",
+            "classify_ms",
+            "merge_ms",
+            "build_ms",
+            "trace_ms",
+            "rays",
+            "nodes_visited",
+            "nodes_visited_per_ray",
+            "pixels_covered",
+            "near_faces",
+        ],
+    ),
+];
+
+/// The keys of a JSON object, sorted (the order is checked on `--stats`' rows).
+fn sorted_keys(v: &serde_json::Value) -> Vec<String> {
+    let mut k: Vec<String> = v
+        .as_object()
+        .unwrap_or_else(|| panic!("an object: {v}"))
+        .keys()
+        .cloned()
+        .collect();
+    k.sort();
+    k
+}
+
+/// `expected` with `time_ms`, sorted.
+fn with_time(expected: &[&str]) -> Vec<String> {
+    let mut k: Vec<String> = expected.iter().map(|s| (*s).to_owned()).collect();
+    k.push("time_ms".to_owned());
+    k.sort();
+    k
+}
+
+#[test]
+fn every_algorithm_reports_its_full_list_of_stats() {
+    let dir = tempdir("stat-keys");
+    let common = ["demo:default", "--size", "48x36", "--threads", "1"];
+    for (algo, expected) in STAT_KEYS {
+        let mut args = vec!["render"];
+        args.extend(common);
+        args.extend([
+            "--algo",
+            algo,
+            "--stats",
+            "--stats-json",
+            "s.json",
+            "-o",
+            "r.png",
+        ]);
+        let o = obscura(&args, &dir);
+        assert!(o.status.success(), "{algo}: {}", text(&o));
+        // `--stats`: one indented row per stat after the algorithm's row, in order.
+        let out = String::from_utf8_lossy(&o.stdout);
+        let rows: Vec<(&str, f64)> = out
+            .lines()
+            .skip_while(|l| !l.starts_with("visibility: "))
+            .skip(1)
+            .take_while(|l| l.starts_with("  "))
+            .map(|l| {
+                let mut w = l.split_whitespace();
+                let key = w.next().unwrap();
+                let value = w.next().unwrap().parse::<f64>();
+                (key, value.unwrap_or_else(|e| panic!("{algo}: {l}: {e}")))
+            })
+            .collect();
+        let keys: Vec<&str> = rows.iter().map(|r| r.0).collect();
+        assert_eq!(keys, expected, "{algo}: --stats rows\n{out}");
+        // `--stats-json`: the same keys and values, and `time_ms` (also `algorithm_ms`).
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("s.json")).unwrap()).unwrap();
+        let stats = &json["stats"];
+        assert_eq!(sorted_keys(stats), with_time(expected), "{algo}: {json}");
+        for (key, value) in &rows {
+            // (serde_json's reading of a decimal may be off by an ulp.)
+            let json = stats[*key].as_f64().unwrap_or(f64::NAN);
+            assert!(
+                (json - value).abs() <= 1e-12 * value.abs(),
+                "{algo}: {key} {json} in JSON, {value} in --stats"
+            );
+        }
+        assert_eq!(stats["time_ms"], json["algorithm_ms"], "{algo}");
+    }
+    // `compare --json`: every algorithm's stats with the same keys; the table's
+    // structure column shows the first five.
+    let names: Vec<&str> = STAT_KEYS.iter().map(|(a, _)| *a).collect();
+    let list = names.join(",");
+    let mut args = vec!["compare"];
+    args.extend(common);
+    args.extend(["--algos", &list, "--json", "c.json", "-o", "c.png"]);
+    let o = obscura(&args, &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("c.json")).unwrap()).unwrap();
+    let rows = json["algorithms"].as_array().expect("an algorithms array");
+    assert_eq!(rows.len(), STAT_KEYS.len(), "{json}");
+    let table = String::from_utf8_lossy(&o.stdout);
+    for (row, (algo, expected)) in rows.iter().zip(STAT_KEYS) {
+        assert_eq!(row["algorithm"], algo, "{json}");
+        assert_eq!(sorted_keys(&row["stats"]), with_time(expected), "{algo}");
+        let line = table
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(algo))
+            .unwrap_or_else(|| panic!("no row of {algo}: {table}"));
+        let shown: Vec<&str> = line
+            .split_whitespace()
+            .skip(4)
+            .map(|kv| kv.split('=').next().unwrap())
+            .collect();
+        assert_eq!(shown, expected[..5], "{algo}: {line}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn library_parameter_errors_are_named_by_their_cli_flags() {
+    // The library names its parameters (`RenderOptions::bounds`...); the CLI's
+    // messages name the flag the user gave.
+    let dir = tempdir("parameter-flags");
+    for (args, flag, library) in [
+        (
+            ["render", "demo:cube", "--bounds", "cone"],
+            "--bounds",
+            "RenderOptions::bounds",
+        ),
+        (
+            ["render", "demo:cube", "--bsp-traversal", "sideways"],
+            "--bsp-traversal",
+            "BspOptions::traversal",
+        ),
+    ] {
+        let o = obscura(&args, &dir);
+        assert!(!o.status.success());
+        let t = text(&o);
+        assert!(t.contains(flag) && !t.contains(library), "{args:?}: {t}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -80,7 +80,9 @@ fn main() {
                 let bsp = ro
                     .bsp
                     .with_memory_limit(ro.bsp.memory_limit.or(ro.memory_limit));
-                index.bsp(&bsp, &obscura::work::Deadline::NONE).expect("BSP tree within the budget");
+                index
+                    .bsp(&bsp, &obscura::work::Deadline::NONE)
+                    .expect("BSP tree within the budget");
             }
         }
         let build_ms = ms(start);

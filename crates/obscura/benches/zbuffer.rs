@@ -55,7 +55,7 @@ fn bench(c: &mut Criterion) {
         // Throughput in covered samples: the pixels the reference depth-tests one by
         // one (the fast path skips the blocks its occlusion culling proves hidden).
         let (_, stats) = zbuffer::render_reference(&view, &opts).expect("rendered");
-        let covered = stats.get("pixels_tested").unwrap_or(0.0) as u64;
+        let covered = stats.pixels_tested;
         g.throughput(Throughput::Elements(covered));
         g.bench_function("render", |b| {
             b.iter(|| zbuffer::render(&view, &opts).expect("rendered"))

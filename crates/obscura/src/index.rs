@@ -415,19 +415,32 @@ mod tests {
         let scene = demo::cube();
         let index = SceneIndex::new(&scene);
         let a = index.bsp(&BspOptions::default(), &NO_LIMIT).unwrap();
-        let b = index.bsp(&BspOptions::default().with_seed(7), &NO_LIMIT).unwrap();
+        let b = index
+            .bsp(&BspOptions::default().with_seed(7), &NO_LIMIT)
+            .unwrap();
         assert!(!Arc::ptr_eq(&a, &b));
-        assert!(Arc::ptr_eq(&a, &index.bsp(&BspOptions::default(), &NO_LIMIT).unwrap()));
+        assert!(Arc::ptr_eq(
+            &a,
+            &index.bsp(&BspOptions::default(), &NO_LIMIT).unwrap()
+        ));
         assert_eq!(index.builds().bsp, 2);
         let budget = MemoryBudget::from_option(None);
-        let g1 = index.grid(&GridOptions::default(), &budget, &NO_LIMIT).unwrap();
+        let g1 = index
+            .grid(&GridOptions::default(), &budget, &NO_LIMIT)
+            .unwrap();
         let g2 = index
-            .grid(&GridOptions::default().with_density(8.0), &budget, &NO_LIMIT)
+            .grid(
+                &GridOptions::default().with_density(8.0),
+                &budget,
+                &NO_LIMIT,
+            )
             .unwrap();
         assert!(!Arc::ptr_eq(&g1, &g2));
         assert!(Arc::ptr_eq(
             &g1,
-            &index.grid(&GridOptions::default(), &budget, &NO_LIMIT).unwrap()
+            &index
+                .grid(&GridOptions::default(), &budget, &NO_LIMIT)
+                .unwrap()
         ));
         assert_eq!(index.builds().grid, 2);
     }

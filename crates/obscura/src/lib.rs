@@ -17,7 +17,8 @@
 //! let camera = scene.default_camera(viewport.aspect());
 //! let view = prepare(&scene, &camera, viewport, &PrepareOptions::default())?;
 //! let (frame, stats) = render(Algorithm::ZBuffer, &view, &RenderOptions::default())?;
-//! println!("{} pixels show a face; {:?}", frame.covered_pixels(), stats.get("pixels_tested"));
+//! let tested = stats.zbuffer().map(|z| z.pixels_tested);
+//! println!("{} pixels show a face; {tested:?} tested", frame.covered_pixels());
 //! # Ok::<(), obscura::Error>(())
 //! ```
 //!

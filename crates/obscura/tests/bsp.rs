@@ -378,7 +378,7 @@ fn interpenetrating_quads_and_coplanar_ties() {
     let v = view(&s, &cam, 120, 60);
     for t in [BspTraversal::BackToFront, BspTraversal::FrontToBack] {
         let (frame, stats) = bsp::render(&v, &options(t)).unwrap();
-        assert!(stats.get("bsp_splits").unwrap() >= 1.0);
+        assert!(stats.bsp_splits >= 1);
         assert_like_zbuffer(&frame, &v, 1.0, t.name());
         // Both squares and both crossing quads are visible.
         for id in 0..4 {
@@ -412,12 +412,12 @@ fn front_to_back_stops_once_the_image_is_full() {
     );
     let v = view(&scene, &cam, 64, 48);
     let (f2b, s) = bsp::render(&v, &options(BspTraversal::FrontToBack)).unwrap();
-    assert_eq!(s.get("early_exit"), Some(1.0));
-    assert!(s.get("visited_fraction").unwrap() < 1.0);
+    assert!(s.early_exit);
+    assert!(s.visited_fraction < 1.0);
     assert!(f2b.ids.iter().all(|&id| id == 100));
     let (_, s) = bsp::render(&v, &options(BspTraversal::BackToFront)).unwrap();
-    assert_eq!(s.get("early_exit"), Some(0.0));
-    assert_eq!(s.get("visited_fraction"), Some(1.0));
+    assert!(!s.early_exit);
+    assert_eq!(s.visited_fraction, 1.0);
 }
 
 #[test]
@@ -452,23 +452,21 @@ fn stats_are_consistent() {
     let started = std::time::Instant::now();
     let (_, s) = bsp::render(&v, &options(BspTraversal::BackToFront)).unwrap();
     let wall_ms = started.elapsed().as_secs_f64() * 1e3;
-    let g = |k: &str| s.get(k).unwrap_or_else(|| panic!("stat {k} missing"));
-    assert_eq!(
-        g("bsp_fragments"),
-        scene.polygon_count() as f64 + g("bsp_splits")
+    assert_eq!(s.bsp_fragments, scene.polygon_count() as u64 + s.bsp_splits);
+    assert!(
+        s.bsp_depth as f64 >= (s.bsp_nodes as f64).log2().floor() && s.bsp_depth <= s.bsp_nodes
     );
-    assert!(g("bsp_depth") >= (g("bsp_nodes")).log2().floor() && g("bsp_depth") <= g("bsp_nodes"));
-    assert_eq!(g("fragments_visited"), g("bsp_fragments"));
-    assert!(g("fragments_painted") <= g("fragments_visited") - g("fragments_culled"));
+    assert_eq!(s.fragments_visited, s.bsp_fragments);
+    assert!(s.fragments_painted <= s.fragments_visited - s.fragments_culled);
     // About half the faces of the closed solids are back faces.
-    assert!(g("fragments_culled") > 0.3 * g("bsp_fragments"));
+    assert!(s.fragments_culled as f64 > 0.3 * s.bsp_fragments as f64);
     // The build time is a measurement inside the render: more than nothing (the tree
     // has nodes) and no more than the whole call took.
-    assert!(g("bsp_nodes") > 0.0);
+    assert!(s.bsp_nodes > 0);
     assert!(
-        g("build_ms") > 0.0 && g("build_ms") <= wall_ms,
+        s.build_ms > 0.0 && s.build_ms <= wall_ms,
         "build_ms {} outside 0..{wall_ms}",
-        g("build_ms")
+        s.build_ms
     );
 }
 
@@ -496,7 +494,7 @@ fn bad_and_degenerate_input_gives_background() {
     .unwrap();
     let v = view(&one, &cam, 16, 12);
     let (f, s) = bsp::render(&v, &RenderOptions::default()).unwrap();
-    assert_eq!(s.get("bsp_nodes"), Some(1.0));
+    assert_eq!(s.bsp_nodes, 1);
     assert_like_zbuffer(&f, &v, 1.0, "single face");
     // Everything behind the camera.
     let away = Camera::perspective(
@@ -611,13 +609,13 @@ fn front_to_back_skips_hidden_and_offscreen_subtrees_without_changing_the_frame(
     );
     let v = view(&scene, &cam, 160, 90);
     let (f2b, s) = bsp::render(&v, &options(BspTraversal::FrontToBack)).unwrap();
-    assert!(s.get("subtrees_hidden").unwrap() > 0.0);
-    assert!(s.get("subtrees_outside").unwrap() > 0.0);
-    assert!(s.get("fragments_visited").unwrap() < s.get("bsp_fragments").unwrap());
+    assert!(s.subtrees_hidden > 0);
+    assert!(s.subtrees_outside > 0);
+    assert!(s.fragments_visited < s.bsp_fragments);
     assert_like_zbuffer(&f2b, &v, 1.0, "street view, front to back");
     let (b2f, s) = bsp::render(&v, &options(BspTraversal::BackToFront)).unwrap();
-    assert_eq!(s.get("subtrees_hidden"), Some(0.0));
-    assert_eq!(s.get("fragments_visited"), s.get("bsp_fragments"));
+    assert_eq!(s.subtrees_hidden, 0);
+    assert_eq!(s.fragments_visited, s.bsp_fragments);
     assert_eq!(f2b.ids, b2f.ids);
 }
 
@@ -760,7 +758,7 @@ fn pieces_cut_by_a_plane_seen_edge_on_keep_the_order() {
     for t in [BspTraversal::BackToFront, BspTraversal::FrontToBack] {
         let opts = RenderOptions::default().with_bsp(bsp.with_traversal(t));
         let (frame, stats) = bsp::render(&view, &opts).unwrap();
-        assert!(stats.get("bsp_splits").unwrap() > 0.0);
+        assert!(stats.bsp_splits > 0);
         let wrong: Vec<(usize, usize, u32, u32)> = (0..z.ids.len())
             .filter(|&i| z.ids[i] != frame.ids[i])
             .map(|i| (i % 32, i / 32, frame.ids[i], z.ids[i]))

@@ -118,9 +118,9 @@ fn octree_depth_10_is_refused_before_building_and_its_estimate_bounds_the_tree()
             &RenderOptions::default().with_octree_depth(depth),
         )
         .unwrap();
-        let actual = stats.get("memory_bytes").unwrap();
+        let actual = stats.octree().expect("the octree's stats").memory_bytes;
         assert!(
-            actual > 0.0 && (actual as u64) <= estimate,
+            actual > 0 && actual <= estimate,
             "depth {depth}: built {actual} bytes, estimated {estimate}"
         );
     }

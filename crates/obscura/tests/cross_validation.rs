@@ -15,7 +15,7 @@ use obscura::scene::random::{
     orbit_cameras, random_triangles,
 };
 use obscura::scene::{Camera, ObjectDesc, demo};
-use obscura::surface::{Algorithm, RenderOptions, render};
+use obscura::surface::{Algorithm, AlgorithmStats, RenderOptions, render};
 use obscura::{Frame, PrepareOptions, PreparedView, Scene, Viewport, prepare};
 
 const EDGE_TIE: f64 = 1e-4;
@@ -511,15 +511,13 @@ fn split_pieces_leave_no_cracks_on_lattice_scenes() {
         let (z, _) = render(Algorithm::ZBuffer, &view, &opts).unwrap();
         for algo in algorithms {
             let (frame, stats) = render(algo, &view, &opts).unwrap();
-            let key = if algo == Algorithm::Bsp {
-                "bsp_splits"
-            } else {
-                "splits"
+            let splits = match &stats.algorithm {
+                AlgorithmStats::Bsp(s) => s.bsp_splits,
+                AlgorithmStats::DepthSort(s) => s.splits,
+                AlgorithmStats::DepthSortMatrix(s) => s.splits,
+                other => panic!("{algo:?} reports no splits: {other:?}"),
             };
-            let splits = stats
-                .get(key)
-                .unwrap_or_else(|| panic!("{algo:?} reports no {key}"));
-            split_views += usize::from(splits > 0.0);
+            split_views += usize::from(splits > 0);
             let holes: Vec<(usize, u32, u32)> = (0..z.ids.len())
                 .filter(|&i| {
                     (z.ids[i] == obscura::BACKGROUND) != (frame.ids[i] == obscura::BACKGROUND)

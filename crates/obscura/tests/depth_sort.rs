@@ -9,7 +9,8 @@ use obscura::cull::backface::BackfaceMode;
 use obscura::geom::polygon_area;
 use obscura::rng::SplitMix64;
 use obscura::scene::{Camera, ObjectDesc, Scene, Viewport, demo};
-use obscura::surface::depth_sort::{PaintOrder, paint_order, paint_order_matrix};
+use obscura::surface::depth_sort::{self, PaintOrder, paint_order, paint_order_matrix};
+use obscura::surface::stats::{AlgorithmStats, DepthSortMatrixStats, DepthSortStats};
 use obscura::surface::{Algorithm, RenderOptions, render};
 use obscura::{BACKGROUND, PrepareOptions, PreparedView, Stats, prepare};
 
@@ -36,6 +37,51 @@ fn front_camera() -> Camera {
         0.5,
         50.,
     )
+}
+
+/// Newell's own figures in the stats of a render.
+fn newell(stats: &Stats) -> &DepthSortStats {
+    stats.depth_sort().expect("depth sort's stats")
+}
+
+/// The covering matrix's own figures in the stats of a render.
+fn matrix(stats: &Stats) -> &DepthSortMatrixStats {
+    stats
+        .depth_sort_matrix()
+        .expect("the matrix depth sort's stats")
+}
+
+/// The figures both depth sorts report.
+struct Shared {
+    polygons: u64,
+    comparisons: u64,
+    decided_coplanar: u64,
+    splits: u64,
+    unresolved: u64,
+    unsorted: u64,
+}
+
+/// The figures both depth sorts report, from the stats of either.
+fn shared(stats: &Stats) -> Shared {
+    match &stats.algorithm {
+        AlgorithmStats::DepthSort(s) => Shared {
+            polygons: s.polygons,
+            comparisons: s.comparisons,
+            decided_coplanar: s.decided_coplanar,
+            splits: s.splits,
+            unresolved: s.unresolved,
+            unsorted: s.unsorted,
+        },
+        AlgorithmStats::DepthSortMatrix(s) => Shared {
+            polygons: s.polygons,
+            comparisons: s.comparisons,
+            decided_coplanar: s.decided_coplanar,
+            splits: s.splits,
+            unresolved: s.unresolved,
+            unsorted: s.unsorted,
+        },
+        other => panic!("not a depth sort's stats: {other:?}"),
+    }
 }
 
 /// Renders with `algo` and asserts that at least `min_fraction` of the pixels have
@@ -109,15 +155,15 @@ fn cyclic_overlap_is_broken_by_a_split_and_renders_like_the_zbuffer() {
             assert!(z.ids.contains(&id));
         }
         let s = check(&v, Algorithm::DepthSort, 1.0, "cyclic triple");
-        assert!(s.get("cycles").unwrap() >= 1.0);
-        assert!(s.get("splits").unwrap() >= 1.0);
-        assert!(s.get("swaps").unwrap() >= 1.0);
-        assert_eq!(s.get("unresolved"), Some(0.0));
+        assert!(newell(&s).cycles >= 1);
+        assert!(shared(&s).splits >= 1);
+        assert!(newell(&s).swaps >= 1);
+        assert_eq!(shared(&s).unresolved, 0);
         let s = check(&v, Algorithm::DepthSortMatrix, 1.0, "cyclic triple");
-        assert!(s.get("cycles_broken").unwrap() >= 1.0);
-        assert!(s.get("splits").unwrap() >= 1.0);
-        assert!(s.get("relations").unwrap() >= 3.0);
-        assert_eq!(s.get("unresolved"), Some(0.0));
+        assert!(matrix(&s).cycles_broken >= 1);
+        assert!(shared(&s).splits >= 1);
+        assert!(matrix(&s).relations >= 3);
+        assert_eq!(shared(&s).unresolved, 0);
         let ro = RenderOptions::default();
         for order in [paint_order(&v, &ro), paint_order_matrix(&v, &ro)] {
             assert!(order.polygons.len() > 3);
@@ -133,14 +179,14 @@ fn cycle_of_sticks_crossing_each_others_planes_is_found_by_the_overlap_depths() 
     let scene = cyclic_triple(0.0);
     let v = view(&scene, &front_camera(), 160, 160);
     let s = check(&v, Algorithm::DepthSort, 1.0, "crossing sticks");
-    assert!(s.get("swap_overlap_depth").unwrap() >= 1.0);
-    assert!(s.get("cycles").unwrap() >= 1.0);
-    assert!(s.get("splits").unwrap() >= 1.0);
-    assert_eq!(s.get("unresolved"), Some(0.0));
+    assert!(newell(&s).swap_overlap_depth >= 1);
+    assert!(newell(&s).cycles >= 1);
+    assert!(shared(&s).splits >= 1);
+    assert_eq!(shared(&s).unresolved, 0);
     let s = check(&v, Algorithm::DepthSortMatrix, 1.0, "crossing sticks");
-    assert!(s.get("decided_overlap_depth").unwrap() >= 3.0);
-    assert!(s.get("cycles_broken").unwrap() >= 1.0);
-    assert_eq!(s.get("unresolved"), Some(0.0));
+    assert!(matrix(&s).decided_overlap_depth >= 3);
+    assert!(matrix(&s).cycles_broken >= 1);
+    assert_eq!(shared(&s).unresolved, 0);
     assert_pieces_keep_area(&v, &paint_order(&v, &RenderOptions::default()));
 }
 
@@ -181,8 +227,8 @@ fn interpenetrating_faces_are_split_and_render_like_the_zbuffer() {
         let v = view(&scene, &cam, 120, 90);
         for algo in VARIANTS {
             let s = check(&v, algo, 1.0, "interpenetrating quads");
-            assert!(s.get("splits").unwrap() >= 1.0, "{algo}");
-            assert_eq!(s.get("unresolved"), Some(0.0));
+            assert!(shared(&s).splits >= 1, "{algo}");
+            assert_eq!(shared(&s).unresolved, 0);
         }
         let ro = RenderOptions::default();
         for order in [paint_order(&v, &ro), paint_order_matrix(&v, &ro)] {
@@ -221,14 +267,14 @@ fn farthest_first_is_overturned_by_swaps_without_splits() {
     let count = |id| z.ids.iter().filter(|&&i| i == id).count();
     assert!(count(1) > 0 && count(2) > 0, "Q and R partly visible");
     let st = check(&v, Algorithm::DepthSort, 1.0, "swap example");
-    assert_eq!(st.get("swaps"), Some(2.0));
-    assert_eq!(st.get("splits"), Some(0.0));
+    assert_eq!(newell(&st).swaps, 2);
+    assert_eq!(shared(&st).splits, 0);
     let order = paint_order(&v, &RenderOptions::default());
     let faces: Vec<u32> = order.polygons.iter().map(|p| p.face).collect();
     assert_eq!(faces.last(), Some(&0), "P is painted last: {faces:?}");
     let st = check(&v, Algorithm::DepthSortMatrix, 1.0, "swap example");
-    assert_eq!(st.get("splits"), Some(0.0));
-    assert_eq!(st.get("relations"), Some(2.0));
+    assert_eq!(shared(&st).splits, 0);
+    assert_eq!(matrix(&st).relations, 2);
 }
 
 /// Scenes that have a back-to-front order need no split.
@@ -292,8 +338,8 @@ fn no_split_when_an_order_exists() {
         let v = view(scene, &cam, 120, 90);
         for algo in VARIANTS {
             let s = check(&v, algo, 1.0, name);
-            assert_eq!(s.get("splits"), Some(0.0), "{name} {algo}");
-            assert_eq!(s.get("unresolved"), Some(0.0), "{name} {algo}");
+            assert_eq!(shared(&s).splits, 0, "{name} {algo}");
+            assert_eq!(shared(&s).unresolved, 0, "{name} {algo}");
         }
     }
     // A sphere with its back faces kept: the far half overlaps the near half, in an
@@ -309,7 +355,7 @@ fn no_split_when_an_order_exists() {
     let v = prepare(&sphere, &oblique_sphere_camera(), vp, &options).unwrap();
     for algo in VARIANTS {
         let s = check(&v, algo, 1.0, "sphere without culling");
-        assert_eq!(s.get("splits"), Some(0.0), "{algo}");
+        assert_eq!(shared(&s).splits, 0, "{algo}");
     }
 }
 
@@ -345,8 +391,8 @@ fn coplanar_overlapping_faces_keep_the_lower_id() {
     let v = view(&s, &cam, 100, 80);
     for algo in VARIANTS {
         let st = check(&v, algo, 1.0, "coplanar");
-        assert!(st.get("decided_coplanar").unwrap() >= 1.0);
-        assert_eq!(st.get("splits"), Some(0.0));
+        assert!(shared(&st).decided_coplanar >= 1);
+        assert_eq!(shared(&st).splits, 0);
     }
     let (frame, _) = render(Algorithm::DepthSort, &v, &RenderOptions::default()).unwrap();
     // The middle of the image is covered by all three squares: face 0 wins, except
@@ -379,8 +425,8 @@ fn random_triangles_render_like_the_zbuffer() {
         let v = view(&scene, &cam, 128, 96);
         for algo in VARIANTS {
             let s = check(&v, algo, 0.999, "random triangles");
-            assert!(s.get("splits").unwrap() > 0.0);
-            assert_eq!(s.get("unresolved"), Some(0.0));
+            assert!(shared(&s).splits > 0);
+            assert_eq!(shared(&s).unresolved, 0);
         }
         assert_pieces_keep_area(&v, &paint_order(&v, &RenderOptions::default()));
     }
@@ -414,7 +460,7 @@ fn demo_scene_and_near_plane_crossings_render_like_the_zbuffer() {
         let v = view(&scene, cam, 128, 96);
         for algo in VARIANTS {
             let s = check(&v, algo, 0.999, &format!("demo camera {i}"));
-            assert_eq!(s.get("unresolved"), Some(0.0));
+            assert_eq!(shared(&s).unresolved, 0);
         }
     }
 }
@@ -424,34 +470,26 @@ fn stats_count_every_comparison_once() {
     let scene = demo::default_scene();
     let vp = Viewport::new(96, 72).unwrap();
     let v = view(&scene, &scene.default_camera(vp.aspect()), 96, 72);
-    let (_, s) = render(Algorithm::DepthSort, &v, &RenderOptions::default()).unwrap();
-    let g = |k: &str| s.get(k).unwrap();
-    assert_eq!(g("polygons"), v.polygon_count() as f64);
-    assert!(g("polygons_sorted") <= g("polygons"));
+    let (_, s) = depth_sort::render(&v, &RenderOptions::default()).unwrap();
+    assert_eq!(s.polygons, v.polygon_count() as u64);
+    assert!(s.polygons_sorted <= s.polygons);
     // Each comparison is decided by one test, or finds a polygon P may hide, which
     // ends in a swap, a split or (never here) an unresolved conflict.
-    let decided: f64 = [
-        "decided_depth",
-        "decided_same_face",
-        "decided_test1_x",
-        "decided_test2_y",
-        "decided_test3",
-        "decided_test4",
-        "decided_test5",
-        "decided_coplanar",
-        "decided_overlap_depth",
-    ]
-    .iter()
-    .map(|k| g(k))
-    .sum();
-    assert_eq!(
-        g("comparisons"),
-        decided + g("swaps") + g("splits") + g("unresolved")
-    );
-    assert!(g("decided_test1_x") > 0.0 && g("decided_test3") + g("decided_test4") > 0.0);
+    let decided = s.decided_depth
+        + s.decided_same_face
+        + s.decided_test1_x
+        + s.decided_test2_y
+        + s.decided_test3
+        + s.decided_test4
+        + s.decided_test5
+        + s.decided_coplanar
+        + s.decided_overlap_depth;
+    assert_eq!(s.comparisons, decided + s.swaps + s.splits + s.unresolved);
+    assert!(s.decided_test1_x > 0 && s.decided_test3 + s.decided_test4 > 0);
     // Painted: at most the sorted polygons plus one per split (polygons whose box
     // holds a sample may still cover none).
-    assert!(g("polygons_painted") <= g("polygons_sorted") + g("splits"));
+    let paint = s.paint.expect("painting counts");
+    assert!(paint.polygons_painted <= s.polygons_sorted + s.splits);
 }
 
 #[test]
@@ -483,7 +521,7 @@ fn empty_and_degenerate_input_gives_background() {
         let v = view(&empty, &cam, 16, 12);
         let (f, s) = render(algo, &v, &RenderOptions::default()).unwrap();
         assert!(f.ids.iter().all(|&i| i == BACKGROUND));
-        assert_eq!(s.get("polygons"), Some(0.0));
+        assert_eq!(shared(&s).polygons, 0);
         let v = view(&one, &cam, 16, 12);
         check(&v, algo, 1.0, "single face");
         let v = view(&demo_scene, &away, 16, 12);
@@ -521,10 +559,7 @@ fn conflicts_left_past_the_split_budget_still_give_the_zbuffer_image() {
     let v = view(&scene, &scene.default_camera(1.0), 256, 256);
     for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
         let (frame, stats) = render(algorithm, &v, &RenderOptions::default()).unwrap();
-        assert!(
-            stats.get("unresolved").unwrap() > 0.0,
-            "{algorithm:?}: {stats:?}"
-        );
+        assert!(shared(&stats).unresolved > 0, "{algorithm:?}: {stats:?}");
         assert_like_zbuffer(&frame, &v, 0.999, &format!("{algorithm:?}"));
     }
 }
@@ -537,15 +572,12 @@ fn thousands_of_slivers_stop_sorting_at_the_comparison_budget() {
     let v = view(&scene, &scene.default_camera(1.0), 256, 256);
     for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
         let (frame, stats) = render(algorithm, &v, &RenderOptions::default()).unwrap();
-        let budget = 1024.0 * stats.get("polygons").unwrap() + f64::from(1u32 << 24);
+        let budget = 1024.0 * shared(&stats).polygons as f64 + f64::from(1u32 << 24);
         assert!(
-            stats.get("comparisons").unwrap() <= budget * 1.01,
+            shared(&stats).comparisons as f64 <= budget * 1.01,
             "{algorithm:?}: {stats:?}"
         );
-        assert!(
-            stats.get("unsorted").unwrap() > 0.0,
-            "{algorithm:?}: {stats:?}"
-        );
+        assert!(shared(&stats).unsorted > 0, "{algorithm:?}: {stats:?}");
         assert_like_zbuffer(&frame, &v, 0.999, &format!("{algorithm:?}"));
     }
 }

@@ -799,8 +799,9 @@ fn render_both(
         &RenderOptions::default().with_octree_depth(depth),
     )
     .unwrap();
-    assert_eq!(stats.get("depth"), Some(f64::from(depth)));
-    assert!(stats.get("nodes_visited_per_ray").unwrap() > 0.0);
+    let stats = stats.octree().expect("the octree's stats");
+    assert_eq!(stats.depth, depth);
+    assert!(stats.nodes_visited_per_ray > 0.0);
     (z, o)
 }
 

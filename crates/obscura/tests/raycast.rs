@@ -16,7 +16,7 @@ use obscura::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb};
 use obscura::raster::FillRule;
 use obscura::scene::{Camera, MeshBuilder, ObjectDesc, demo};
 use obscura::surface::raycast::{self, Acceleration};
-use obscura::surface::{Algorithm, RenderOptions, render};
+use obscura::surface::{Algorithm, AlgorithmStats, RenderOptions, render};
 use obscura::{BACKGROUND, Frame, PrepareOptions, Scene, Stats, Viewport, prepare};
 use proptest::prelude::*;
 
@@ -283,27 +283,30 @@ fn bounding_volumes_agree_and_save_tests() {
         let (f, s) =
             raycast::render(&view, Acceleration::Bounds(kind), &RenderOptions::default()).unwrap();
         assert_identical(&format!("bounds {}", kind.name()), &brute, &f);
-        let get = |k: &str| s.get(k).unwrap();
-        let rays = f64::from(vp.width * vp.height);
-        assert_eq!(get("rays"), rays);
-        assert_eq!(get("objects"), 37.0);
-        assert_eq!(get("bound_tests"), rays * 37.0);
-        assert!(get("bound_hits") < get("bound_tests"), "{kind:?}");
+        let AlgorithmStats::RaycastBounds(s) = s else {
+            panic!("not the bounds variant's stats: {s:?}");
+        };
+        let rays = u64::from(vp.width * vp.height);
+        assert_eq!(s.ray.rays, rays);
+        assert_eq!(s.objects, 37);
+        assert_eq!(s.bound_tests, rays * 37);
+        assert!(s.bound_hits < s.bound_tests, "{kind:?}");
         // Brute force's count is every front triangle for every ray.
+        let brute_tests = brute_stats
+            .ray()
+            .expect("a ray caster's stats")
+            .triangle_tests;
+        assert_eq!(s.triangle_tests_brute_force, brute_tests);
         assert_eq!(
-            get("triangle_tests_brute_force"),
-            brute_stats.get("triangle_tests").unwrap()
-        );
-        assert_eq!(
-            get("triangle_tests_saved"),
-            get("triangle_tests_brute_force") - get("triangle_tests")
+            s.triangle_tests_saved,
+            s.triangle_tests_brute_force - s.ray.triangle_tests
         );
         assert!(
-            get("saved_fraction") > 0.5,
+            s.saved_fraction > 0.5,
             "{kind:?} saved {}",
-            get("saved_fraction")
+            s.saved_fraction
         );
-        hits_by_kind.push((kind, get("bound_hits")));
+        hits_by_kind.push((kind, s.bound_hits));
     }
     // The 26-DOP includes the AABB's three slabs: it is inside it, so it is met by no
     // more rays.
@@ -373,8 +376,9 @@ fn grid_accepts_hits_only_inside_the_current_cell() {
     // The renderer checks the same for every pixel and reports it.
     let view = prepare(&scene, &cam, vp, &PrepareOptions::default()).unwrap();
     let (_, stats) = render(Algorithm::RaycastGrid, &view, &RenderOptions::default()).unwrap();
-    assert_eq!(stats.get("hits_outside_cell"), Some(0.0));
-    assert!(stats.get("cells_per_ray").unwrap() > 1.0);
+    let grid = stats.raycast_grid().expect("the grid's stats");
+    assert_eq!(grid.hits_outside_cell, 0);
+    assert!(grid.cells_per_ray > 1.0);
 }
 
 #[test]
@@ -890,7 +894,10 @@ fn a_distant_ground_does_not_slow_the_bvh() {
             bvh,
             1.0,
         );
-        stats.get("node_visits_per_ray").unwrap()
+        stats
+            .raycast_bvh()
+            .expect("the BVH's stats")
+            .node_visits_per_ray
     };
     let base = visits(&alone);
     for width in [1e3, 1e5, 1e7] {
@@ -923,36 +930,33 @@ fn stats_report_the_figures_of_each_variant() {
         &VARIANTS,
         &RenderOptions::default(),
     );
+    // Every figure of every variant, by its field (a missing one does not compile;
+    // the CLI's tests check the keys).
     for (a, _, s) in &out {
-        for key in [
-            "rays",
-            "hits",
-            "triangle_tests",
-            "trace_ms",
-            "mrays_per_s",
-            "time_ms",
-        ] {
-            assert!(s.get(key).is_some(), "{a}: no {key}");
-        }
-        assert_eq!(s.get("rays"), Some(1200.0));
+        let ray = s
+            .algorithm
+            .ray()
+            .unwrap_or_else(|| panic!("{a}: no ray stats"));
+        assert_eq!(ray.rays, 1200, "{a}");
+        assert!(ray.hits > 0 && ray.hits <= ray.rays, "{a}");
+        assert!(ray.triangle_tests > 0, "{a}");
+        assert!(ray.trace_ms >= 0.0 && ray.mrays_per_s >= 0.0, "{a}");
+        assert!(s.time_ms >= ray.trace_ms, "{a}");
     }
-    let bvh = frame_of(&out, Algorithm::RaycastBvh).1;
-    for key in [
-        "build_ms",
-        "nodes",
-        "leaves",
-        "depth",
-        "triangle_tests_per_ray",
-        "node_visits_per_ray",
-    ] {
-        assert!(bvh.get(key).is_some(), "bvh: no {key}");
-    }
-    let grid = frame_of(&out, Algorithm::RaycastGrid).1;
-    for key in ["cells", "refs_per_cell", "cells_per_ray", "build_ms"] {
-        assert!(grid.get(key).is_some(), "grid: no {key}");
-    }
+    let bvh = frame_of(&out, Algorithm::RaycastBvh)
+        .1
+        .raycast_bvh()
+        .unwrap();
+    assert!(bvh.build_ms >= 0.0 && bvh.nodes >= 1 && bvh.leaves >= 1 && bvh.depth >= 1);
+    assert!(bvh.triangle_tests_per_ray > 0.0 && bvh.node_visits_per_ray > 0.0);
+    let grid = frame_of(&out, Algorithm::RaycastGrid)
+        .1
+        .raycast_grid()
+        .unwrap();
+    assert!(grid.cells >= 1 && grid.refs_per_cell > 0.0 && grid.cells_per_ray > 0.0);
+    assert!(grid.build_ms >= 0.0);
     // The accelerations test far fewer triangles than brute force.
-    let tests = |a: Algorithm| frame_of(&out, a).1.get("triangle_tests").unwrap();
+    let tests = |a: Algorithm| frame_of(&out, a).1.algorithm.ray().unwrap().triangle_tests as f64;
     let (brute, bvh, grid) = (
         tests(Algorithm::Raycast),
         tests(Algorithm::RaycastBvh),
@@ -1046,7 +1050,7 @@ fn grid_equals_brute_force_on_scenes_tiny_against_their_distance() {
     let vp = Viewport::new(24, 24).unwrap();
     let ro = RenderOptions::default();
     let mut failures = Vec::new();
-    let mut far_rays = 0.0;
+    let mut far_rays = 0;
     let mut case = 0u64;
     let mut refused = 0u64;
     for &(size, dist, off) in &[
@@ -1118,7 +1122,7 @@ fn grid_equals_brute_force_on_scenes_tiny_against_their_distance() {
                         let prebuilt = UniformGrid::build(&tris, &GridOptions::default());
                         let (other, stats) =
                             raycast::render_grid(&view, &tris, &prebuilt, &ro).unwrap();
-                        far_rays += stats.get("far_rays").unwrap();
+                        far_rays += stats.far_rays;
                         let name = format!(
                             "size {size:e} dist {dist:e} off {off} flat {flat} n {count} dir {dir:?} {kind}"
                         );
@@ -1139,7 +1143,7 @@ fn grid_equals_brute_force_on_scenes_tiny_against_their_distance() {
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    assert!(far_rays > 0.0);
+    assert!(far_rays > 0);
     // Most views are drawn: only the narrowest are refused.
     assert!(
         refused * 4 < case * 2,

@@ -7,8 +7,14 @@ use glam::DVec3;
 use hsr_scenes::{Case, scene_of};
 use obscura::scene::Camera;
 use obscura::surface::scanline::{self, SpanDecision};
+use obscura::surface::stats::ScanlineStats;
 use obscura::surface::{Algorithm, RenderOptions};
-use obscura::{BACKGROUND, prepare};
+use obscura::{BACKGROUND, Stats, prepare};
+
+/// The scanline's own figures in the stats of a render.
+fn sl(stats: &Stats) -> &ScanlineStats {
+    stats.scanline().expect("the scanline's stats")
+}
 
 const ALGO: Algorithm = Algorithm::Scanline;
 
@@ -27,7 +33,7 @@ fn thin_triangles_match_zbuffer() {
 fn interpenetrating_faces_match_zbuffer() {
     let stats = hsr_scenes::interpenetrating().assert_matches_zbuffer(ALGO);
     // Faces cross inside spans: some spans must be decided pixel by pixel.
-    assert!(stats.get("spans_per_pixel").unwrap() > 0.0);
+    assert!(sl(&stats).spans_per_pixel > 0);
 }
 
 #[test]
@@ -42,7 +48,7 @@ fn coplanar_touching_faces_match_zbuffer() {
     // The square's bottom edge lies on a row of samples: there its side edges allow
     // a span that the bottom edge (not a top-left edge) refuses, and the span check
     // must fall back to the coverage rule.
-    assert!(stats.get("span_fallbacks").unwrap() >= 1.0);
+    assert!(sl(&stats).span_fallbacks >= 1);
 }
 
 #[test]
@@ -81,7 +87,7 @@ fn empty_culled_and_inside_views_are_background() {
         assert_eq!(frame.covered_pixels(), 0, "{}", case.name);
         assert!(frame.depth.iter().all(|d| d.is_infinite()), "{}", case.name);
         assert_eq!(frame, reference, "{}", case.name);
-        assert_eq!(stats.get("spans"), Some(0.0), "{}", case.name);
+        assert_eq!(sl(&stats).spans, 0, "{}", case.name);
     }
 }
 
@@ -124,8 +130,8 @@ fn active_edge_list_and_spans_of_a_hand_worked_scene() {
 
     // Horizontal edges never enter the table: two sides of the square, two of the
     // triangle.
-    assert_eq!(stats.get("edges"), Some(4.0));
-    assert_eq!(stats.get("max_active_edges"), Some(4.0));
+    assert_eq!(stats.edges, 4);
+    assert_eq!(stats.max_active_edges, 4);
 
     // Row 1 (y = 1.5) is above everything; rows 2..=9 cross the square, rows 4..=7 the
     // triangle (its sample lines y = 4.5 .. 7.5).
@@ -208,16 +214,16 @@ fn active_edge_list_and_spans_of_a_hand_worked_scene() {
             SpanDecision::Coherence
         ]
     );
-    assert_eq!(stats.get("spans_by_coherence"), Some(2.0));
+    assert_eq!(stats.spans_by_coherence, 2);
     // Each reuse skips finding the nearest of 2 faces (1) and checking it at both ends (2).
-    assert_eq!(stats.get("comparisons_skipped_by_coherence"), Some(6.0));
+    assert_eq!(stats.comparisons_skipped_by_coherence, 6);
     // Single-face spans: 8 rows of the square alone or with the triangle's side spans.
     let single: usize = rows
         .iter()
         .flat_map(|r| &r.spans)
         .filter(|s| s.decision == SpanDecision::SingleFace)
         .count();
-    assert_eq!(stats.get("spans_without_comparison"), Some(single as f64));
+    assert_eq!(stats.spans_without_comparison, single as u64);
     assert_eq!(single, 4 + 2 * 4); // rows 2,3,8,9: one; rows 4..=7: two
 
     // The picture: the triangle over the square.
@@ -249,16 +255,13 @@ fn coherence_skips_comparisons_on_repeated_rows() {
     let case = pixel_case("stacked rectangles", &polys, 64, 48);
     let stats = case.assert_matches_zbuffer(ALGO);
     // Per row: [10,20) {0,1}, [20,30) {0,1,2}, [30,40) {1,2}: three multi-face spans.
-    assert_eq!(stats.get("spans_decided_at_ends"), Some(2.0 * 2.0));
-    assert_eq!(stats.get("spans_by_coherence"), Some(2.0 * 38.0));
-    assert_eq!(stats.get("spans_by_kept_nearest"), Some(40.0));
+    assert_eq!(sl(&stats).spans_decided_at_ends, 2 * 2);
+    assert_eq!(sl(&stats).spans_by_coherence, 2 * 38);
+    assert_eq!(sl(&stats).spans_by_kept_nearest, 40);
     // Skipped per reuse: 3 (k - 1) for k faces: 3 + 6.
-    assert_eq!(
-        stats.get("comparisons_skipped_by_coherence"),
-        Some(9.0 * 38.0)
-    );
-    assert_eq!(stats.get("spans_without_comparison"), Some(2.0 * 40.0));
-    assert_eq!(stats.get("spans"), Some(5.0 * 40.0));
+    assert_eq!(sl(&stats).comparisons_skipped_by_coherence, 9 * 38);
+    assert_eq!(sl(&stats).spans_without_comparison, 2 * 40);
+    assert_eq!(sl(&stats).spans, 5 * 40);
 }
 
 #[test]
@@ -271,9 +274,9 @@ fn coherence_is_not_used_when_faces_interpenetrate() {
     ];
     let case = pixel_case("crossing rectangles", &polys, 40, 32);
     let stats = case.assert_matches_zbuffer(ALGO);
-    assert_eq!(stats.get("spans_by_coherence"), Some(0.0));
-    assert_eq!(stats.get("orders_proven"), Some(0.0));
-    assert_eq!(stats.get("spans_per_pixel"), Some(24.0));
+    assert_eq!(sl(&stats).spans_by_coherence, 0);
+    assert_eq!(sl(&stats).orders_proven, 0);
+    assert_eq!(sl(&stats).spans_per_pixel, 24);
     let ((frame, _), _) = case.render_pair(ALGO);
     // Left of x = 20 the flat one (face 0) is nearer, right of it the tilted one.
     assert_eq!(frame.id(10, 10), 0);
@@ -293,11 +296,11 @@ fn a_face_hidden_over_its_whole_span_is_left_out_on_entering() {
     ];
     let case = pixel_case("triangle behind a square", &polys, 20, 12);
     let stats = case.assert_matches_zbuffer(ALGO);
-    assert_eq!(stats.get("faces_hidden_on_entering"), Some(4.0));
-    assert_eq!(stats.get("depth_comparisons"), Some(8.0));
+    assert_eq!(sl(&stats).faces_hidden_on_entering, 4);
+    assert_eq!(sl(&stats).depth_comparisons, 8);
     // Rows 2, 3, 8, 9: one span; rows 4..=7: split at the triangle's crossings.
-    assert_eq!(stats.get("spans"), Some(4.0 + 4.0 * 3.0));
-    assert_eq!(stats.get("spans_without_comparison"), Some(16.0));
+    assert_eq!(sl(&stats).spans, 4 + 4 * 3);
+    assert_eq!(sl(&stats).spans_without_comparison, 16);
     let ((frame, _), _) = case.render_pair(ALGO);
     assert_eq!(frame.id(8, 5), 0);
 }
@@ -328,7 +331,7 @@ fn degenerate_polygons_are_skipped_without_panic() {
     );
     let case = Case::new("degenerate", scene_of(&polys), cam, 8, 6);
     let stats = case.assert_matches_zbuffer(ALGO);
-    assert_eq!(stats.get("spans"), Some(0.0));
+    assert_eq!(sl(&stats).spans, 0);
 }
 
 #[test]
@@ -338,8 +341,8 @@ fn a_single_face_is_drawn_without_any_depth_comparison() {
     let case = pixel_case("single triangle", &polys, 16, 12);
     let stats = case.assert_matches_zbuffer(ALGO);
     // Rows 1..=9 (sample lines 1.5 .. 9.5) each hold one span of the triangle.
-    assert_eq!(stats.get("spans"), Some(9.0));
-    assert_eq!(stats.get("spans_without_comparison"), Some(9.0));
-    assert_eq!(stats.get("depth_comparisons"), Some(0.0));
-    assert_eq!(stats.get("edges"), Some(3.0));
+    assert_eq!(sl(&stats).spans, 9);
+    assert_eq!(sl(&stats).spans_without_comparison, 9);
+    assert_eq!(sl(&stats).depth_comparisons, 0);
+    assert_eq!(sl(&stats).edges, 3);
 }

@@ -8,6 +8,7 @@ use hsr_scenes::{Case, scene_of};
 use obscura::raster::{FillRule, PixelRect, PolygonCoverage};
 use obscura::rng::SplitMix64;
 use obscura::scene::Camera;
+use obscura::surface::stats::WarnockStats;
 use obscura::surface::warnock::{Relation, classify};
 use obscura::surface::{Algorithm, RenderOptions};
 use obscura::{BACKGROUND, Stats, prepare};
@@ -17,10 +18,15 @@ const ALGO: Algorithm = Algorithm::Warnock;
 /// Every window ends in exactly one rule or a pixel decision, and every rule-5 window
 /// has at least two non-empty quarters.
 fn assert_rule_accounting(stats: &Stats) {
-    let g = |k: &str| stats.get(k).unwrap();
-    let ended = g("rule1") + g("rule2") + g("rule3") + g("rule4") + g("pixel_decisions");
-    assert_eq!(g("windows"), ended + g("rule5"));
-    assert!(g("windows") >= 1.0 + 2.0 * g("rule5"));
+    let s = wk(stats);
+    let ended = s.rule1 + s.rule2 + s.rule3 + s.rule4 + s.pixel_decisions;
+    assert_eq!(s.windows, ended + s.rule5);
+    assert!(s.windows > 2 * s.rule5);
+}
+
+/// Warnock's own figures in the stats of a render.
+fn wk(stats: &Stats) -> &WarnockStats {
+    stats.warnock().expect("Warnock's stats")
 }
 
 #[test]
@@ -82,8 +88,8 @@ fn empty_culled_and_inside_views_are_background() {
         assert_eq!(frame.covered_pixels(), 0, "{}", case.name);
         assert_eq!(frame, reference, "{}", case.name);
         // Nothing in view: the whole image is one window decided by rule 1.
-        assert_eq!(stats.get("windows"), Some(1.0), "{}", case.name);
-        assert_eq!(stats.get("rule1"), Some(1.0), "{}", case.name);
+        assert_eq!(wk(&stats).windows, 1, "{}", case.name);
+        assert_eq!(wk(&stats).rule1, 1, "{}", case.name);
     }
 }
 
@@ -185,10 +191,17 @@ fn pixel_case(name: &str, polys: &[Vec<(f64, f64, f64)>], w: u64, h: u64) -> Cas
 fn rule1_fires_once_on_an_empty_scene() {
     let case = pixel_case("empty", &[], 32, 24);
     let stats = case.assert_matches_zbuffer(ALGO);
-    assert_eq!(stats.get("windows"), Some(1.0));
-    assert_eq!(stats.get("rule1"), Some(1.0));
-    for k in ["rule2", "rule3", "rule4", "rule5", "pixel_decisions"] {
-        assert_eq!(stats.get(k), Some(0.0), "{k}");
+    assert_eq!(wk(&stats).windows, 1);
+    assert_eq!(wk(&stats).rule1, 1);
+    let s = wk(&stats);
+    for (k, n) in [
+        ("rule2", s.rule2),
+        ("rule3", s.rule3),
+        ("rule4", s.rule4),
+        ("rule5", s.rule5),
+        ("pixel_decisions", s.pixel_decisions),
+    ] {
+        assert_eq!(n, 0, "{k}");
     }
 }
 
@@ -198,8 +211,8 @@ fn rule2_draws_a_lone_small_triangle_in_the_first_window() {
     let case = pixel_case("small triangle", &[tri], 32, 24);
     let stats = case.assert_matches_zbuffer(ALGO);
     // Inside the whole image and alone: rule 2 at once.
-    assert_eq!(stats.get("windows"), Some(1.0));
-    assert_eq!(stats.get("rule2"), Some(1.0));
+    assert_eq!(wk(&stats).windows, 1);
+    assert_eq!(wk(&stats).rule2, 1);
     let ((frame, _), _) = case.render_pair(ALGO);
     assert!(frame.covered_pixels() > 10);
     assert_eq!(frame.id(0, 0), BACKGROUND);
@@ -216,8 +229,8 @@ fn rule3_fills_the_image_with_a_surrounding_quad() {
     ];
     let case = pixel_case("covering quad", &[quad], 32, 24);
     let stats = case.assert_matches_zbuffer(ALGO);
-    assert_eq!(stats.get("windows"), Some(1.0));
-    assert_eq!(stats.get("rule3"), Some(1.0));
+    assert_eq!(wk(&stats).windows, 1);
+    assert_eq!(wk(&stats).rule3, 1);
     let ((frame, _), _) = case.render_pair(ALGO);
     assert_eq!(frame.covered_pixels(), 32 * 24);
 }
@@ -233,8 +246,8 @@ fn rule4_lets_a_near_surrounding_quad_hide_a_far_triangle() {
     let tri = vec![(5.2, 4.1, -1.0), (12.7, 6.3, -1.0), (7.4, 11.9, -1.0)];
     let case = pixel_case("quad over triangle", &[quad.clone(), tri.clone()], 32, 24);
     let stats = case.assert_matches_zbuffer(ALGO);
-    assert_eq!(stats.get("windows"), Some(1.0));
-    assert_eq!(stats.get("rule4"), Some(1.0));
+    assert_eq!(wk(&stats).windows, 1);
+    assert_eq!(wk(&stats).rule4, 1);
     let ((frame, _), _) = case.render_pair(ALGO);
     assert!(frame.ids.iter().all(|&i| i == 0));
 
@@ -244,8 +257,8 @@ fn rule4_lets_a_near_surrounding_quad_hide_a_far_triangle() {
     let tri_front: Vec<_> = tri.iter().map(|&(x, y, _)| (x, y, 3.0)).collect();
     let case = pixel_case("triangle over quad", &[quad, tri_front], 32, 24);
     let stats = case.assert_matches_zbuffer(ALGO);
-    assert!(stats.get("rule5").unwrap() >= 1.0);
-    assert!(stats.get("rule3").unwrap() >= 1.0);
+    assert!(wk(&stats).rule5 >= 1);
+    assert!(wk(&stats).rule3 >= 1);
     assert_rule_accounting(&stats);
 }
 
@@ -268,10 +281,10 @@ fn rule5_subdivides_interpenetrating_faces_down_to_pixels() {
     ];
     let case = pixel_case("crossing quads", &[a, b], 32, 24);
     let stats = case.assert_matches_zbuffer(ALGO);
-    assert!(stats.get("rule5").unwrap() >= 1.0);
-    assert!(stats.get("pixel_decisions").unwrap() >= 1.0);
+    assert!(wk(&stats).rule5 >= 1);
+    assert!(wk(&stats).pixel_decisions >= 1);
     // Subdivision reached single pixels: 32x24, 16x12, 8x6, 4x3, 2x2 or 2x1, 1x1.
-    assert_eq!(stats.get("max_depth"), Some(5.0));
+    assert_eq!(wk(&stats).max_depth, 5);
     assert_rule_accounting(&stats);
     let ((frame, _), _) = case.render_pair(ALGO);
     assert_eq!(frame.id(8, 10), 0);
@@ -286,10 +299,10 @@ fn windows_see_only_faces_not_disjoint_from_them() {
     let t2 = vec![(30.0, 22.0, 0.0), (20.0, 22.0, 0.0), (30.0, 14.0, 0.0)];
     let case = pixel_case("opposite corners", &[t1, t2], 32, 24);
     let stats = case.assert_matches_zbuffer(ALGO);
-    assert_eq!(stats.get("windows"), Some(5.0));
-    assert_eq!(stats.get("rule5"), Some(1.0));
-    assert_eq!(stats.get("rule2"), Some(2.0));
-    assert_eq!(stats.get("rule1"), Some(2.0));
+    assert_eq!(wk(&stats).windows, 5);
+    assert_eq!(wk(&stats).rule5, 1);
+    assert_eq!(wk(&stats).rule2, 2);
+    assert_eq!(wk(&stats).rule1, 2);
 }
 
 #[test]

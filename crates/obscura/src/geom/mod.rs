@@ -71,7 +71,7 @@ impl std::str::FromStr for BoundsKind {
             .find(|k| k.name() == s)
             .ok_or_else(|| {
                 crate::Error::option(
-                    "--bounds",
+                    "RenderOptions::bounds",
                     format!("unknown bounding volume \"{s}\" (known: sphere, aabb, obb, kdop)"),
                 )
             })

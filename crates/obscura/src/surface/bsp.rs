@@ -53,13 +53,14 @@ use glam::DVec3;
 use crate::accel::bsp::{BspTraversal, BspTree, BspVisitor, Viewpoint};
 use crate::clip::outcode_homogeneous;
 use crate::index::SceneIndex;
+use crate::surface::RenderOptions;
 use crate::surface::image::paint::{PaintMode, Painter, PixelRays, ScreenCut, piece_region};
-use crate::surface::{RenderOptions, Stats};
+use crate::surface::stats::BspStats;
 use crate::view::{ModelView, View, ViewTransform, ViewVertex};
 use crate::{Error, Frame, Result};
 
 /// Renders a prepared view with a BSP tree built for it from `options.bsp`.
-pub fn render(view: &View<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+pub fn render(view: &View<'_>, options: &RenderOptions) -> Result<(Frame, BspStats)> {
     render_indexed(&SceneIndex::new(view.scene()), view, options)
 }
 
@@ -69,7 +70,7 @@ pub fn render_indexed(
     index: &SceneIndex<'_>,
     view: &View<'_>,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, BspStats)> {
     // The render's budget, unless the BSP options carry their own.
     let bsp = options
         .bsp
@@ -80,7 +81,7 @@ pub fn render_indexed(
 
 impl BspTree {
     /// Renders a view of the scene this tree was built from (see [`render_with_tree`]).
-    pub fn render(&self, view: &View<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+    pub fn render(&self, view: &View<'_>, options: &RenderOptions) -> Result<(Frame, BspStats)> {
         render_with_tree(self, view, options)
     }
 }
@@ -323,10 +324,10 @@ pub fn render_with_tree(
     tree: &BspTree,
     view: &View<'_>,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, BspStats)> {
     if !tree.matches(view.scene()) {
         return Err(Error::option(
-            "--algo bsp",
+            "bsp::render_with_tree tree",
             "the BSP tree was built from another scene (objects, vertices or face ids differ)",
         ));
     }
@@ -363,32 +364,27 @@ pub fn render_with_tree(
     let view_ms = start.elapsed().as_secs_f64() * 1e3;
     let total = tree.stats().fragments;
     let b = tree.stats();
-    let mut stats = Stats::default();
-    stats.set("bsp_nodes", b.nodes as f64);
-    stats.set("bsp_fragments", b.fragments as f64);
-    stats.set("bsp_splits", b.splits as f64);
-    stats.set("bsp_depth", b.depth as f64);
-    stats.set("build_ms", b.build_ms);
-    stats.set(
-        "front_to_back",
-        f64::from(u8::from(traversal == BspTraversal::FrontToBack)),
-    );
-    stats.set("view_ms", view_ms);
-    stats.set("fragments_visited", counts.visited as f64);
-    stats.set("fragments_culled", counts.culled as f64);
-    stats.set("fragments_outside", counts.outside as f64);
-    stats.set("subtrees_hidden", counts.hidden as f64);
-    stats.set("subtrees_outside", counts.subtrees_outside as f64);
-    stats.set("fragments_painted", painter.polygons_painted as f64);
-    stats.set("pixels_written", painter.pixels_written as f64);
-    stats.set("early_exit", f64::from(u8::from(!done)));
-    stats.set(
-        "visited_fraction",
-        if total == 0 {
+    let stats = BspStats {
+        bsp_nodes: b.nodes,
+        bsp_fragments: b.fragments,
+        bsp_splits: b.splits,
+        bsp_depth: b.depth,
+        build_ms: b.build_ms,
+        front_to_back: traversal == BspTraversal::FrontToBack,
+        view_ms,
+        fragments_visited: counts.visited,
+        fragments_culled: counts.culled,
+        fragments_outside: counts.outside,
+        subtrees_hidden: counts.hidden,
+        subtrees_outside: counts.subtrees_outside,
+        fragments_painted: painter.polygons_painted,
+        pixels_written: painter.pixels_written,
+        early_exit: !done,
+        visited_fraction: if total == 0 {
             1.0
         } else {
             counts.visited as f64 / total as f64
         },
-    );
+    };
     Ok((painter.finish(), stats))
 }

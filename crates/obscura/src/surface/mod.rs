@@ -28,6 +28,7 @@ mod image;
 pub mod octree;
 pub mod raycast;
 pub mod scanline;
+pub mod stats;
 pub mod warnock;
 pub mod zbuffer;
 
@@ -36,16 +37,17 @@ use std::str::FromStr;
 use std::sync::Arc;
 use std::time::Instant;
 
-use serde::ser::{Serialize, SerializeMap, Serializer};
-
 use crate::geom::BoundsKind;
 use crate::index::SceneIndex;
 use crate::raster::FillRule;
 use crate::view::{PreparedView, View};
 use crate::{Error, Frame, Result};
 
+pub use stats::{AlgorithmStats, Stats};
+
 /// A hidden-surface algorithm.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Algorithm {
     /// Z-buffer: the reference.
     ZBuffer,
@@ -142,7 +144,7 @@ impl FromStr for Algorithm {
             .find(|a| a.name() == s)
             .ok_or_else(|| {
                 Error::option(
-                    "--algo",
+                    "algorithm",
                     format!(
                         "unknown algorithm \"{s}\" (known: {})",
                         Algorithm::ALL.map(Algorithm::name).join(", ")
@@ -305,47 +307,8 @@ impl RenderOptions {
     }
 }
 
-/// Named numbers that show how an algorithm worked (pixels tested, BSP splits,
-/// Warnock windows per rule...), in insertion order.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Stats {
-    /// `(name, value)` pairs.
-    pub entries: Vec<(String, f64)>,
-}
-
-impl Stats {
-    /// Sets a value (replacing an earlier one of the same name).
-    pub fn set(&mut self, name: &str, value: f64) {
-        match self.entries.iter_mut().find(|(k, _)| k == name) {
-            Some(e) => e.1 = value,
-            None => self.entries.push((name.to_string(), value)),
-        }
-    }
-
-    /// Adds to a value (starting from 0).
-    pub fn add(&mut self, name: &str, value: f64) {
-        let old = self.get(name).unwrap_or(0.0);
-        self.set(name, old + value);
-    }
-
-    /// A value by name.
-    #[must_use]
-    pub fn get(&self, name: &str) -> Option<f64> {
-        self.entries.iter().find(|(k, _)| k == name).map(|e| e.1)
-    }
-}
-
-impl Serialize for Stats {
-    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let mut m = s.serialize_map(Some(self.entries.len()))?;
-        for (k, v) in &self.entries {
-            m.serialize_entry(k, v)?;
-        }
-        m.end()
-    }
-}
-
-/// Renders a prepared view with an algorithm. The stats end with `time_ms`.
+/// Renders a prepared view with an algorithm: the frame, and the algorithm's
+/// [`AlgorithmStats`] with the milliseconds of the call (listed last, as `time_ms`).
 ///
 /// ```
 /// use obscura::{scene::{demo, Viewport}, view::{prepare, PrepareOptions}};
@@ -355,7 +318,8 @@ impl Serialize for Stats {
 /// let view = prepare(&scene, &scene.default_camera(vp.aspect()), vp, &PrepareOptions::default()).unwrap();
 /// let (frame, stats) = render(Algorithm::ZBuffer, &view, &RenderOptions::default()).unwrap();
 /// assert!(frame.covered_pixels() > 0);
-/// assert!(stats.get("time_ms").is_some());
+/// assert!(stats.zbuffer().unwrap().pixels_written > 0);
+/// assert!(stats.time_ms >= 0.0);
 /// ```
 ///
 /// The structures an algorithm needs (triangles, BVH, grid, BSP tree, octree) are built
@@ -385,16 +349,23 @@ pub(crate) fn render_indexed(
     {
         options.deadline.admit(&estimate)?;
     }
-    let (frame, mut stats) = match algorithm {
-        Algorithm::ZBuffer => zbuffer::render(view, options),
-        Algorithm::Scanline => scanline::render(view, options),
-        Algorithm::DepthSort => depth_sort::render(view, options),
-        Algorithm::DepthSortMatrix => depth_sort::render_matrix(view, options),
-        Algorithm::Warnock => warnock::render(view, options),
+    use AlgorithmStats as S;
+    let (frame, stats) = match algorithm {
+        Algorithm::ZBuffer => zbuffer::render(view, options).map(|(f, s)| (f, S::ZBuffer(s))),
+        Algorithm::Scanline => scanline::render(view, options).map(|(f, s)| (f, S::Scanline(s))),
+        Algorithm::DepthSort => {
+            depth_sort::render(view, options).map(|(f, s)| (f, S::DepthSort(s)))
+        }
+        Algorithm::DepthSortMatrix => {
+            depth_sort::render_matrix(view, options).map(|(f, s)| (f, S::DepthSortMatrix(s)))
+        }
+        Algorithm::Warnock => warnock::render(view, options).map(|(f, s)| (f, S::Warnock(s))),
         _ => return render_view_unchecked(index, algorithm, view, options, start),
     }?;
-    stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
-    Ok((frame, stats))
+    Ok((
+        frame,
+        Stats::new(stats, start.elapsed().as_secs_f64() * 1e3),
+    ))
 }
 
 /// Renders a [`View`] with an algorithm that needs no screen polygons
@@ -437,9 +408,10 @@ fn render_view_unchecked(
     options: &RenderOptions,
     start: Instant,
 ) -> Result<(Frame, Stats)> {
+    use AlgorithmStats as S;
     use raycast::Acceleration;
-    let (frame, mut stats) = match algorithm {
-        Algorithm::Bsp => bsp::render_indexed(index, view, options),
+    let (frame, stats) = match algorithm {
+        Algorithm::Bsp => bsp::render_indexed(index, view, options).map(|(f, s)| (f, S::Bsp(s))),
         Algorithm::Raycast => {
             raycast::render_indexed(index, view, Acceleration::BruteForce, options)
         }
@@ -448,14 +420,18 @@ fn render_view_unchecked(
         }
         Algorithm::RaycastBvh => raycast::render_indexed(index, view, Acceleration::Bvh, options),
         Algorithm::RaycastGrid => raycast::render_indexed(index, view, Acceleration::Grid, options),
-        Algorithm::Octree => octree::render_indexed(index, view, options),
+        Algorithm::Octree => {
+            octree::render_indexed(index, view, options).map(|(f, s)| (f, S::Octree(s)))
+        }
         _ => Err(Error::option(
             "algorithm",
             format!("{algorithm} needs the screen polygons of a prepared view"),
         )),
     }?;
-    stats.set("time_ms", start.elapsed().as_secs_f64() * 1e3);
-    Ok((frame, stats))
+    Ok((
+        frame,
+        Stats::new(stats, start.elapsed().as_secs_f64() * 1e3),
+    ))
 }
 
 /// The work of `algorithm` on `view` where it is a product of counts known before it
@@ -487,9 +463,7 @@ pub fn estimate(
             painted_pixels(view),
             NS_PER_PAINTED_PIXEL,
         )),
-        Algorithm::Bsp
-            if options.bsp.traversal == crate::accel::bsp::BspTraversal::BackToFront =>
-        {
+        Algorithm::Bsp if options.bsp.traversal == crate::accel::bsp::BspTraversal::BackToFront => {
             Some(Estimate::new(
                 name,
                 "pixels painted",
@@ -501,8 +475,7 @@ pub fn estimate(
         // areas is only measured when the crude bound (every polygon the whole image)
         // could matter, so that ordinary views pay nothing for it.
         Algorithm::ZBuffer
-            if view.polygon_count() as f64 * pixels * crate::work::NS_PER_ZBUFFER_PIXEL
-                > 1e9 =>
+            if view.polygon_count() as f64 * pixels * crate::work::NS_PER_ZBUFFER_PIXEL > 1e9 =>
         {
             Some(Estimate::new(
                 name,
@@ -712,5 +685,27 @@ mod tests {
             assert_eq!(a.name().parse::<Algorithm>().unwrap(), a);
         }
         assert!("nope".parse::<Algorithm>().is_err());
+    }
+
+    #[test]
+    fn errors_name_library_parameters_not_cli_flags() {
+        let errors = [
+            "nope".parse::<Algorithm>().unwrap_err(),
+            "nope".parse::<BoundsKind>().unwrap_err(),
+            "nope"
+                .parse::<crate::accel::bsp::BspTraversal>()
+                .unwrap_err(),
+            crate::accel::octree::check_depth(crate::accel::octree::MAX_DEPTH + 1).unwrap_err(),
+        ];
+        let named = [
+            "algorithm",
+            "RenderOptions::bounds",
+            "BspOptions::traversal",
+            "RenderOptions::octree_depth",
+        ];
+        for (e, name) in errors.iter().zip(named) {
+            let text = e.to_string();
+            assert!(text.contains(name) && !text.contains("--"), "{text}");
+        }
     }
 }

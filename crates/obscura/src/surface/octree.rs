@@ -68,13 +68,14 @@ use crate::frame::BACKGROUND;
 use crate::geom::Aabb;
 use crate::index::SceneIndex;
 use crate::scene::{Camera, Viewport};
-use crate::surface::{RenderOptions, Stats};
+use crate::surface::RenderOptions;
+use crate::surface::stats::OctreeStats;
 use crate::view::View;
 use crate::{Frame, Result};
 
 /// Renders a prepared view by voxelizing its scene into an octree and tracing one ray
 /// per pixel through it, front to back.
-pub fn render(view: &View<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+pub fn render(view: &View<'_>, options: &RenderOptions) -> Result<(Frame, OctreeStats)> {
     render_indexed(&SceneIndex::new(view.scene()), view, options)
 }
 
@@ -84,7 +85,7 @@ pub fn render_indexed(
     index: &SceneIndex<'_>,
     view: &View<'_>,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, OctreeStats)> {
     let vp = view.viewport();
     let start = Instant::now();
     let tree = index.octree(options.octree_depth, options)?;
@@ -99,34 +100,35 @@ pub fn render_indexed(
     let trace_ms = start.elapsed().as_secs_f64() * 1e3;
     options.report(1.0);
 
-    let mut stats = Stats::default();
     let counts = tree.leaf_counts();
     let b = tree.build_stats();
-    stats.set("depth", f64::from(tree.depth()));
-    stats.set("voxels_per_side", f64::from(1u32 << tree.depth()));
-    stats.set("triangles", b.triangles as f64);
-    stats.set("nodes", tree.node_count() as f64);
-    stats.set("nodes_before_merge", b.raw_nodes as f64);
-    stats.set("leaves_empty", counts.empty as f64);
-    stats.set("leaves_full", counts.full as f64);
-    stats.set("leaves_partial", counts.partial as f64);
-    stats.set("bytes_per_node", std::mem::size_of::<Node>() as f64);
-    stats.set("memory_bytes", tree.memory_bytes() as f64);
-    stats.set("sat_tests", b.sat_tests as f64);
-    stats.set("components", b.components as f64);
-    stats.set("inside_queries", b.inside_queries as f64);
-    stats.set("triangles_ms", b.triangles_ms);
-    stats.set("subdivide_ms", b.subdivide_ms);
-    stats.set("classify_ms", b.classify_ms);
-    stats.set("merge_ms", b.compact_ms);
-    stats.set("build_ms", build_ms);
-    stats.set("trace_ms", trace_ms);
-    let rays = vp.pixel_count() as f64;
-    stats.set("rays", rays);
-    stats.set("nodes_visited", visited as f64);
-    stats.set("nodes_visited_per_ray", visited as f64 / rays);
-    stats.set("pixels_covered", frame.covered_pixels() as f64);
-    stats.set("near_faces", near.triangles.len() as f64);
+    let rays = vp.pixel_count() as u64;
+    let stats = OctreeStats {
+        depth: tree.depth(),
+        voxels_per_side: 1u32 << tree.depth(),
+        triangles: b.triangles as u64,
+        nodes: tree.node_count() as u64,
+        nodes_before_merge: b.raw_nodes as u64,
+        leaves_empty: counts.empty as u64,
+        leaves_full: counts.full as u64,
+        leaves_partial: counts.partial as u64,
+        bytes_per_node: std::mem::size_of::<Node>() as u64,
+        memory_bytes: tree.memory_bytes() as u64,
+        sat_tests: b.sat_tests,
+        components: b.components as u64,
+        inside_queries: b.inside_queries as u64,
+        triangles_ms: b.triangles_ms,
+        subdivide_ms: b.subdivide_ms,
+        classify_ms: b.classify_ms,
+        merge_ms: b.compact_ms,
+        build_ms,
+        trace_ms,
+        rays,
+        nodes_visited: visited,
+        nodes_visited_per_ray: visited as f64 / rays as f64,
+        pixels_covered: frame.covered_pixels() as u64,
+        near_faces: near.triangles.len() as u64,
+    };
     Ok((frame, stats))
 }
 
@@ -380,7 +382,7 @@ mod tests {
         let v = prepare(&s, &cam, vp, &PrepareOptions::default()).unwrap();
         let (f, stats) = render(&v, &RenderOptions::default()).unwrap();
         assert_eq!(f.covered_pixels(), 0);
-        assert_eq!(stats.get("nodes"), Some(1.0));
+        assert_eq!(stats.nodes, 1);
     }
 
     #[test]
@@ -395,6 +397,6 @@ mod tests {
         )
         .unwrap();
         let e = render(&v, &RenderOptions::default().with_octree_depth(40)).unwrap_err();
-        assert!(e.to_string().contains("octree-depth"), "{e}");
+        assert!(e.to_string().contains("RenderOptions::octree_depth"), "{e}");
     }
 }

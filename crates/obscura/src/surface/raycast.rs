@@ -38,7 +38,9 @@
 //! - Input: a [`View`] (for its scene, camera, viewport and culling decisions); the
 //!   triangles and the BVH or grid are built per call by [`render`], once per scene by
 //!   [`render_indexed`] (a [`SceneIndex`]).
-//!   Output: a [`Frame`] (face id and eye-space depth `t` as `f32`) and [`Stats`].
+//!   Output: a [`Frame`] (face id and eye-space depth `t` as `f32`) and the variant's
+//!   stats ([`RaycastStats`], [`RaycastBoundsStats`], [`RaycastBvhStats`],
+//!   [`RaycastGridStats`]).
 //! - Complexity: brute force O(p T) for p pixels and T triangles; bounds O(p (K + T_hit))
 //!   for K objects; BVH about O(p log T); grid O(p (cells per ray + refs per cell)).
 //! - Order and parallelism: pixels are traced in 8x8 tiles (neighbouring rays visit the
@@ -64,7 +66,10 @@ use crate::accel::triangles::{
 };
 use crate::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb, RaySlabs, Sphere};
 use crate::index::SceneIndex;
-use crate::surface::{RenderOptions, Stats};
+use crate::surface::RenderOptions;
+use crate::surface::stats::{
+    AlgorithmStats, RayStats, RaycastBoundsStats, RaycastBvhStats, RaycastGridStats, RaycastStats,
+};
 use crate::view::View;
 use crate::{Frame, Result};
 
@@ -128,7 +133,7 @@ pub fn render(
     view: &View<'_>,
     acceleration: Acceleration,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, AlgorithmStats)> {
     render_indexed(&SceneIndex::new(view.scene()), view, acceleration, options)
 }
 
@@ -139,12 +144,29 @@ pub fn render_indexed(
     view: &View<'_>,
     acceleration: Acceleration,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, AlgorithmStats)> {
     let (triangles, soup_ms) = index.triangles_timed();
-    let (frame, mut stats) = match acceleration {
-        Acceleration::BruteForce => render_brute_force(view, triangles, options),
-        Acceleration::Bounds(kind) => render_bounds(view, triangles, kind, options),
-        Acceleration::Bvh => render_bvh(view, triangles, index.bvh(), options),
+    let triangles_ms = Some(*soup_ms);
+    Ok(match acceleration {
+        Acceleration::BruteForce => {
+            let (frame, s) = render_brute_force(view, triangles, options)?;
+            (
+                frame,
+                AlgorithmStats::Raycast(RaycastStats { triangles_ms, ..s }),
+            )
+        }
+        Acceleration::Bounds(kind) => {
+            let (frame, s) = render_bounds(view, triangles, kind, options)?;
+            let s = RaycastBoundsStats { triangles_ms, ..s };
+            (frame, AlgorithmStats::RaycastBounds(s))
+        }
+        Acceleration::Bvh => {
+            let (frame, s) = render_bvh(view, triangles, index.bvh(), options)?;
+            (
+                frame,
+                AlgorithmStats::RaycastBvh(RaycastBvhStats { triangles_ms, ..s }),
+            )
+        }
         Acceleration::Grid => {
             // Cells sized for the rounding of this view's rays (see `accel::grid`).
             let origins = PrimaryRays::new(view.camera(), view.viewport()).origin_magnitude();
@@ -153,11 +175,13 @@ pub fn render_indexed(
                 &options.budget(),
                 &options.deadline,
             )?;
-            render_grid(view, triangles, &grid, options)
+            let (frame, s) = render_grid(view, triangles, &grid, options)?;
+            (
+                frame,
+                AlgorithmStats::RaycastGrid(RaycastGridStats { triangles_ms, ..s }),
+            )
         }
-    }?;
-    stats.set("triangles_ms", *soup_ms);
-    Ok((frame, stats))
+    })
 }
 
 /// Brute force: every ray against every triangle (seed 000's `RayCasting`).
@@ -165,7 +189,7 @@ pub fn render_brute_force(
     view: &View<'_>,
     triangles: &SceneTriangles,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, RaycastStats)> {
     struct Run<'a, 'b> {
         ctx: &'a HitContext<'b>,
         triangles: &'a SceneTriangles,
@@ -192,11 +216,11 @@ pub fn render_brute_force(
             counters,
         })
     })?;
-    let mut stats = setup.stats(&counters, ms_since(start));
-    stats.set(
-        "triangle_tests_per_ray",
-        per(counters.triangle_tests, counters.rays),
-    );
+    let stats = RaycastStats {
+        ray: setup.stats(&counters, ms_since(start)),
+        triangle_tests_per_ray: per(counters.triangle_tests, counters.rays),
+        triangles_ms: None,
+    };
     Ok((frame, stats))
 }
 
@@ -259,7 +283,7 @@ pub fn render_bounds(
     triangles: &SceneTriangles,
     kind: BoundsKind,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, RaycastBoundsStats)> {
     struct Run<'a, 'b> {
         ctx: &'a HitContext<'b>,
         triangles: &'a SceneTriangles,
@@ -337,26 +361,22 @@ pub fn render_bounds(
             })
         })
     })?;
-    let mut stats = setup.stats(&counters, ms_since(start));
     let brute = counters.rays * setup.front_triangles;
-    stats.set("bounds_build_ms", build_ms);
-    stats.set("objects", bounds.len() as f64);
-    stats.set("bound_tests", counters.bound_tests as f64);
-    stats.set("bound_hits", counters.bound_hits as f64);
-    stats.set("triangle_tests", counters.triangle_tests as f64);
-    stats.set("triangle_tests_brute_force", brute as f64);
-    stats.set(
-        "triangle_tests_saved",
-        brute.saturating_sub(counters.triangle_tests) as f64,
-    );
-    stats.set(
-        "saved_fraction",
-        if brute == 0 {
+    let stats = RaycastBoundsStats {
+        ray: setup.stats(&counters, ms_since(start)),
+        bounds_build_ms: build_ms,
+        objects: bounds.len() as u64,
+        bound_tests: counters.bound_tests,
+        bound_hits: counters.bound_hits,
+        triangle_tests_brute_force: brute,
+        triangle_tests_saved: brute.saturating_sub(counters.triangle_tests),
+        saved_fraction: if brute == 0 {
             0.0
         } else {
             1.0 - counters.triangle_tests as f64 / brute as f64
         },
-    );
+        triangles_ms: None,
+    };
     Ok((frame, stats))
 }
 
@@ -367,7 +387,7 @@ pub fn render_bvh(
     triangles: &SceneTriangles,
     bvh: &Bvh,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, RaycastBvhStats)> {
     let setup = Setup::new(view, triangles, options)?;
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
@@ -389,27 +409,21 @@ pub fn render_bvh(
             hits
         });
     })?;
-    let mut stats = setup.stats(&counters, ms_since(start));
-    stats.set(
-        "packet_node_visits_per_ray",
-        per(counters.packet_nodes, counters.rays),
-    );
     let b = bvh.stats();
-    stats.set("build_ms", b.build_ms);
-    stats.set("binary_nodes", b.binary_nodes as f64);
-    stats.set("binary_depth", b.binary_depth as f64);
-    stats.set("nodes", b.nodes as f64);
-    stats.set("leaves", b.leaves as f64);
-    stats.set("depth", b.depth as f64);
-    stats.set("sah_cost", b.sah_cost);
-    stats.set(
-        "node_visits_per_ray",
-        per(counters.bound_tests, counters.rays),
-    );
-    stats.set(
-        "triangle_tests_per_ray",
-        per(counters.triangle_tests, counters.rays),
-    );
+    let stats = RaycastBvhStats {
+        ray: setup.stats(&counters, ms_since(start)),
+        packet_node_visits_per_ray: per(counters.packet_nodes, counters.rays),
+        build_ms: b.build_ms,
+        binary_nodes: b.binary_nodes as u64,
+        binary_depth: b.binary_depth as u64,
+        nodes: b.nodes as u64,
+        leaves: b.leaves as u64,
+        depth: b.depth as u64,
+        sah_cost: b.sah_cost,
+        node_visits_per_ray: per(counters.bound_tests, counters.rays),
+        triangle_tests_per_ray: per(counters.triangle_tests, counters.rays),
+        triangles_ms: None,
+    };
     Ok((frame, stats))
 }
 
@@ -419,7 +433,7 @@ pub fn render_grid(
     triangles: &SceneTriangles,
     grid: &UniformGrid,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, RaycastGridStats)> {
     let setup = Setup::new(view, triangles, options)?;
     let start = Instant::now();
     let (frame, counters) = setup.cast_bands(options, |band, counters| {
@@ -446,26 +460,26 @@ pub fn render_grid(
             out.hit
         })
     })?;
-    let mut stats = setup.stats(&counters, ms_since(start));
     let g = grid.stats();
     let [nx, ny, nz] = grid.resolution();
-    stats.set("build_ms", g.build_ms);
-    stats.set("cells", g.cells as f64);
-    stats.set("resolution_x", f64::from(nx));
-    stats.set("resolution_y", f64::from(ny));
-    stats.set("resolution_z", f64::from(nz));
-    stats.set("refs", g.refs as f64);
-    stats.set("refs_per_cell", per(g.refs as u64, g.cells as u64));
-    stats.set("empty_cells", g.empty_cells as f64);
-    stats.set("largest_cell", g.largest_cell as f64);
-    stats.set("cells_per_ray", per(counters.cells, counters.rays));
-    stats.set(
-        "triangle_tests_per_ray",
-        per(counters.triangle_tests, counters.rays),
-    );
-    stats.set("mailbox_hits", counters.mailbox_hits as f64);
-    stats.set("hits_outside_cell", counters.hits_outside_cell as f64);
-    stats.set("far_rays", counters.far_rays as f64);
+    let stats = RaycastGridStats {
+        ray: setup.stats(&counters, ms_since(start)),
+        build_ms: g.build_ms,
+        cells: g.cells as u64,
+        resolution_x: nx,
+        resolution_y: ny,
+        resolution_z: nz,
+        refs: g.refs as u64,
+        refs_per_cell: per(g.refs as u64, g.cells as u64),
+        empty_cells: g.empty_cells as u64,
+        largest_cell: g.largest_cell as u64,
+        cells_per_ray: per(counters.cells, counters.rays),
+        triangle_tests_per_ray: per(counters.triangle_tests, counters.rays),
+        mailbox_hits: counters.mailbox_hits,
+        hits_outside_cell: counters.hits_outside_cell,
+        far_rays: counters.far_rays,
+        triangles_ms: None,
+    };
     Ok((frame, stats))
 }
 
@@ -696,23 +710,20 @@ impl<'a> Setup<'a> {
     }
 
     /// The stats every variant reports.
-    fn stats(&self, c: &RayCounters, trace_ms: f64) -> Stats {
-        let mut s = Stats::default();
-        s.set("triangles", self.triangle_count as f64);
-        s.set("front_triangles", self.front_triangles as f64);
-        s.set("rays", c.rays as f64);
-        s.set("hits", c.hits as f64);
-        s.set("triangle_tests", c.triangle_tests as f64);
-        s.set("trace_ms", trace_ms);
-        s.set(
-            "mrays_per_s",
-            if trace_ms > 0.0 {
+    fn stats(&self, c: &RayCounters, trace_ms: f64) -> RayStats {
+        RayStats {
+            triangles: self.triangle_count as u64,
+            front_triangles: self.front_triangles,
+            rays: c.rays,
+            hits: c.hits,
+            triangle_tests: c.triangle_tests,
+            trace_ms,
+            mrays_per_s: if trace_ms > 0.0 {
                 c.rays as f64 / trace_ms / 1e3
             } else {
                 0.0
             },
-        );
-        s
+        }
     }
 }
 

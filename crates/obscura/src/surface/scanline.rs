@@ -90,7 +90,8 @@ use crate::Result;
 use crate::frame::Frame;
 use crate::raster::DepthPlane;
 use crate::raster::edges_row_span;
-use crate::surface::{RenderOptions, Stats};
+use crate::surface::RenderOptions;
+use crate::surface::stats::ScanlineStats;
 use crate::view::{PreparedView, ViewTransform};
 
 use crate::surface::image::screen_faces::{hides, hides_over_overlap, stored_key, surely_nearer};
@@ -99,7 +100,7 @@ use edge_table::{EdgeTable, ScanEdge, TableEdge, exact_pixel, tolerance};
 use faces::{DEAD, Faces, NONE, slot_hash};
 
 /// Renders a prepared view with the scanline algorithm.
-pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, ScanlineStats)> {
     let (frame, stats, _) = run(view, options, 0..0)?;
     Ok((frame, stats))
 }
@@ -110,7 +111,7 @@ pub fn trace(
     view: &PreparedView<'_>,
     options: &RenderOptions,
     rows: Range<u32>,
-) -> Result<(Frame, Stats, Vec<RowTrace>)> {
+) -> Result<(Frame, ScanlineStats, Vec<RowTrace>)> {
     run(view, options, rows)
 }
 
@@ -290,7 +291,7 @@ fn run(
     view: &PreparedView<'_>,
     options: &RenderOptions,
     trace_rows: Range<u32>,
-) -> Result<(Frame, Stats, Vec<RowTrace>)> {
+) -> Result<(Frame, ScanlineStats, Vec<RowTrace>)> {
     let vp = view.viewport();
     // Zero bits, not background: the pages are first written where spans are drawn,
     // and ids are stored complemented (0 is "nothing drawn") until `keys_to_depths`.
@@ -346,32 +347,31 @@ fn run(
     options.report(1.0);
     keys_to_depths(&mut s.frame, s.transform);
     let c = &s.counters;
-    let mut stats = Stats::default();
-    stats.set("polygons", view.polygon_count() as f64);
-    stats.set("edges", table.len() as f64);
-    stats.set("max_active_edges", c.max_active_edges as f64);
-    stats.set("max_active_faces", c.max_active_faces as f64);
-    stats.set("spans", c.spans as f64);
-    stats.set("spans_without_comparison", c.without_comparison as f64);
-    stats.set("spans_decided_at_ends", c.at_ends as f64);
-    stats.set("spans_by_kept_nearest", c.kept as f64);
-    stats.set("faces_hidden_on_entering", c.hidden_on_entering as f64);
-    stats.set("spans_by_coherence", c.by_coherence as f64);
-    stats.set("spans_per_pixel", c.per_pixel as f64);
-    stats.set("depth_comparisons", c.comparisons as f64);
-    stats.set("comparisons_skipped_by_coherence", c.skipped as f64);
-    stats.set("order_checks", c.order_checks as f64);
-    stats.set("orders_proven", c.orders_proven as f64);
-    stats.set("crossing_corrections", c.corrections as f64);
-    stats.set("span_fallbacks", c.fallbacks as f64);
     let ms = |s: f64| (s * 1e5).round() / 100.0;
-    stats.set("table_ms", ms(table_seconds));
-    for (name, &s) in ["enter_ms", "sweep_ms", "sort_ms", "walk_ms"]
-        .iter()
-        .zip(&c.seconds[1..])
-    {
-        stats.set(name, ms(s));
-    }
+    let stats = ScanlineStats {
+        polygons: view.polygon_count() as u64,
+        edges: table.len() as u64,
+        max_active_edges: c.max_active_edges as u64,
+        max_active_faces: c.max_active_faces as u64,
+        spans: c.spans,
+        spans_without_comparison: c.without_comparison,
+        spans_decided_at_ends: c.at_ends,
+        spans_by_kept_nearest: c.kept,
+        faces_hidden_on_entering: c.hidden_on_entering,
+        spans_by_coherence: c.by_coherence,
+        spans_per_pixel: c.per_pixel,
+        depth_comparisons: c.comparisons,
+        comparisons_skipped_by_coherence: c.skipped,
+        order_checks: c.order_checks,
+        orders_proven: c.orders_proven,
+        crossing_corrections: c.corrections,
+        span_fallbacks: c.fallbacks,
+        table_ms: ms(table_seconds),
+        enter_ms: ms(c.seconds[1]),
+        sweep_ms: ms(c.seconds[2]),
+        sort_ms: ms(c.seconds[3]),
+        walk_ms: ms(c.seconds[4]),
+    };
     Ok((s.frame, stats, traces))
 }
 

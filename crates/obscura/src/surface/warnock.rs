@@ -47,10 +47,11 @@
 use crate::Result;
 use crate::frame::Frame;
 use crate::raster::{EdgeFunction, PixelRect, PolygonCoverage};
+use crate::surface::RenderOptions;
 use crate::surface::image::screen_faces::{
     ScreenFaces, corner_samples, fill_run, hides, intersect, set_pixel, stored_key, surely_nearer,
 };
-use crate::surface::{RenderOptions, Stats};
+use crate::surface::stats::WarnockStats;
 use crate::view::{PreparedView, ViewTransform};
 
 /// How a face's covered samples relate to a window's pixels (seed 003's relations).
@@ -123,7 +124,7 @@ fn classify_edges(edges: &[EdgeFunction], r: PixelRect, window: PixelRect) -> Re
 }
 
 /// Renders a prepared view by area subdivision.
-pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, WarnockStats)> {
     let vp = view.viewport();
     let frame = Frame::new(vp)?;
     let faces = ScreenFaces::new(view, options.fill_rule);
@@ -161,16 +162,19 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
     }
     options.report(1.0);
     let c = &s.counters;
-    let mut stats = Stats::default();
-    stats.set("polygons", view.polygon_count() as f64);
-    stats.set("windows", c.windows as f64);
-    for (k, n) in c.rules.iter().enumerate() {
-        stats.set(&format!("rule{}", k + 1), *n as f64);
-    }
-    stats.set("pixel_decisions", c.pixel_decisions as f64);
-    stats.set("classifications", c.classifications as f64);
-    stats.set("depth_comparisons", c.comparisons as f64);
-    stats.set("max_depth", f64::from(c.max_depth));
+    let stats = WarnockStats {
+        polygons: view.polygon_count() as u64,
+        windows: c.windows,
+        rule1: c.rules[0],
+        rule2: c.rules[1],
+        rule3: c.rules[2],
+        rule4: c.rules[3],
+        rule5: c.rules[4],
+        pixel_decisions: c.pixel_decisions,
+        classifications: c.classifications,
+        depth_comparisons: c.comparisons,
+        max_depth: c.max_depth,
+    };
     Ok((s.frame, stats))
 }
 

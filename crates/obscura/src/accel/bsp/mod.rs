@@ -104,7 +104,7 @@ impl std::str::FromStr for BspTraversal {
             "back-to-front" => Ok(BspTraversal::BackToFront),
             "front-to-back" => Ok(BspTraversal::FrontToBack),
             _ => Err(Error::option(
-                "--bsp-traversal",
+                "BspOptions::traversal",
                 format!("unknown traversal \"{s}\" (known: back-to-front, front-to-back)"),
             )),
         }
@@ -238,7 +238,7 @@ impl BspOptions {
         let ok = |v: f64| v.is_finite() && v >= 0.0;
         if !ok(self.split_weight) || !ok(self.balance_weight) {
             return Err(Error::option(
-                "--bsp-weights",
+                "BspOptions::split_weight, balance_weight",
                 format!(
                     "the weights must be finite and non-negative (got split {}, balance {})",
                     self.split_weight, self.balance_weight

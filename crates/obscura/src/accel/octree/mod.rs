@@ -398,7 +398,7 @@ impl PartialEq for Octree {
 pub(crate) fn check_depth(depth: u32) -> Result<()> {
     if depth > MAX_DEPTH {
         return Err(Error::option(
-            "--octree-depth",
+            "RenderOptions::octree_depth",
             format!(
                 "depth {depth} is above the maximum {MAX_DEPTH} ({} voxels on a side)",
                 1u32 << MAX_DEPTH

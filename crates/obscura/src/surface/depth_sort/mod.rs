@@ -92,8 +92,9 @@ mod matrix;
 mod newell;
 mod work;
 
+use crate::surface::RenderOptions;
 use crate::surface::image::paint::{PaintMode, Painter};
-use crate::surface::{RenderOptions, Stats};
+use crate::surface::stats::{AlgorithmStats, DepthSortMatrixStats, DepthSortStats, PaintStats};
 use crate::view::{PreparedView, ViewVertex};
 use crate::{Frame, Result};
 
@@ -158,8 +159,9 @@ pub struct PaintOrder {
     /// Polygons in painting order (farthest first). View polygons covering no pixel
     /// sample are left out.
     pub polygons: Vec<OrderedPolygon>,
-    /// The statistics [`render`] reports (without the painting counts).
-    pub stats: Stats,
+    /// The statistics [`render`] (or [`render_matrix`]) reports, without the painting
+    /// counts: [`AlgorithmStats::DepthSort`] or [`AlgorithmStats::DepthSortMatrix`].
+    pub stats: AlgorithmStats,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -168,12 +170,71 @@ enum Variant {
     Matrix,
 }
 
+/// What a sort did, before painting: its counters and polygon counts.
+#[derive(Default)]
+struct Outcome {
+    c: Counters,
+    view_polygons: usize,
+    sorted: usize,
+}
+
+impl Outcome {
+    /// The stats of the Newell variant.
+    fn newell(&self, paint: Option<PaintStats>) -> DepthSortStats {
+        DepthSortStats {
+            polygons: self.view_polygons as u64,
+            polygons_sorted: self.sorted as u64,
+            comparisons: self.c.comparisons,
+            decided_depth: self.c.depth,
+            decided_same_face: self.c.same_face,
+            decided_test1_x: self.c.test1,
+            decided_test2_y: self.c.test2,
+            decided_test3: self.c.test3,
+            decided_test4: self.c.test4,
+            decided_test5: self.c.test5,
+            decided_coplanar: self.c.coplanar,
+            decided_overlap_depth: self.c.overlap_depth,
+            swaps: self.c.swaps,
+            swap_test3: self.c.swap_test3,
+            swap_test4: self.c.swap_test4,
+            swap_overlap_depth: self.c.swap_overlap_depth,
+            cycles: self.c.cycles,
+            splits: self.c.splits,
+            unresolved: self.c.unresolved,
+            unsorted: self.c.unsorted,
+            paint,
+        }
+    }
+
+    /// The stats of the matrix variant.
+    fn matrix(&self, paint: Option<PaintStats>) -> DepthSortMatrixStats {
+        DepthSortMatrixStats {
+            polygons: self.view_polygons as u64,
+            polygons_sorted: self.sorted as u64,
+            comparisons: self.c.comparisons,
+            decided_same_face: self.c.same_face,
+            decided_test1_x: self.c.test1,
+            decided_test2_y: self.c.test2,
+            decided_planes_both_orders: self.c.test3,
+            decided_test5: self.c.test5,
+            decided_coplanar: self.c.coplanar,
+            decided_overlap_depth: self.c.overlap_depth,
+            relations: self.c.relations,
+            cycles_broken: self.c.cycles,
+            splits: self.c.splits,
+            unresolved: self.c.unresolved,
+            unsorted: self.c.unsorted,
+            paint,
+        }
+    }
+}
+
 fn run(
     view: &PreparedView<'_>,
     options: &RenderOptions,
     variant: Variant,
     paint: &mut dyn FnMut(&WorkSet, u32),
-) -> Result<Stats> {
+) -> Result<Outcome> {
     let mut ws = WorkSet::from_view(view, options.fill_rule);
     ws.budget = options.budget();
     ws.deadline = options.deadline.clone();
@@ -184,45 +245,13 @@ fn run(
         Variant::Newell => newell::sort(&mut ws, &mut c, &mut progress, paint),
         Variant::Matrix => matrix::sort(&mut ws, &mut c, &mut progress, paint),
     }
-    let mut stats = Stats::default();
-    stats.set("polygons", ws.view_polygons as f64);
-    stats.set("polygons_sorted", sorted as f64);
-    stats.set("comparisons", c.comparisons as f64);
-    if variant == Variant::Newell {
-        stats.set("decided_depth", c.depth as f64);
-    }
-    stats.set("decided_same_face", c.same_face as f64);
-    stats.set("decided_test1_x", c.test1 as f64);
-    stats.set("decided_test2_y", c.test2 as f64);
-    match variant {
-        Variant::Newell => {
-            stats.set("decided_test3", c.test3 as f64);
-            stats.set("decided_test4", c.test4 as f64);
-        }
-        Variant::Matrix => stats.set("decided_planes_both_orders", c.test3 as f64),
-    }
-    stats.set("decided_test5", c.test5 as f64);
-    stats.set("decided_coplanar", c.coplanar as f64);
-    stats.set("decided_overlap_depth", c.overlap_depth as f64);
-    match variant {
-        Variant::Newell => {
-            stats.set("swaps", c.swaps as f64);
-            stats.set("swap_test3", c.swap_test3 as f64);
-            stats.set("swap_test4", c.swap_test4 as f64);
-            stats.set("swap_overlap_depth", c.swap_overlap_depth as f64);
-            stats.set("cycles", c.cycles as f64);
-        }
-        Variant::Matrix => {
-            stats.set("relations", c.relations as f64);
-            stats.set("cycles_broken", c.cycles as f64);
-        }
-    }
-    stats.set("splits", c.splits as f64);
-    stats.set("unresolved", c.unresolved as f64);
-    stats.set("unsorted", c.unsorted as f64);
     match ws.over_budget {
         Some(e) => Err(e),
-        None => Ok(stats),
+        None => Ok(Outcome {
+            c,
+            view_polygons: ws.view_polygons,
+            sorted,
+        }),
     }
 }
 
@@ -230,10 +259,10 @@ fn render_variant(
     view: &PreparedView<'_>,
     options: &RenderOptions,
     variant: Variant,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, Outcome, PaintStats)> {
     let mut painter = Painter::new(view, options.fill_rule, PaintMode::Overwrite)?;
     let mut screen = Vec::new();
-    let mut stats = run(view, options, variant, &mut |ws, i| {
+    let outcome = run(view, options, variant, &mut |ws, i| {
         let Some(plane) = ws.depth_plane(i) else {
             return;
         };
@@ -254,9 +283,11 @@ fn render_variant(
             painter.paint_piece(&screen, plane, region, ws.cuts(i), face);
         }
     })?;
-    stats.set("polygons_painted", painter.polygons_painted as f64);
-    stats.set("pixels_written", painter.pixels_written as f64);
-    Ok((painter.finish(), stats))
+    let paint = PaintStats {
+        polygons_painted: painter.polygons_painted,
+        pixels_written: painter.pixels_written,
+    };
+    Ok((painter.finish(), outcome, paint))
 }
 
 fn order_variant(view: &PreparedView<'_>, options: &RenderOptions, variant: Variant) -> PaintOrder {
@@ -264,7 +295,7 @@ fn order_variant(view: &PreparedView<'_>, options: &RenderOptions, variant: Vari
     // A paint order has no error to return: it is computed without a budget (no set
     // passes u64::MAX bytes, so `run` cannot fail here).
     let options = &options.clone().with_memory_limit(Some(u64::MAX));
-    let stats = run(view, options, variant, &mut |ws, i| {
+    let outcome = run(view, options, variant, &mut |ws, i| {
         let p = &ws.polys[i as usize];
         polygons.push(OrderedPolygon {
             face: p.face,
@@ -274,6 +305,10 @@ fn order_variant(view: &PreparedView<'_>, options: &RenderOptions, variant: Vari
         });
     })
     .unwrap_or_default();
+    let stats = match variant {
+        Variant::Newell => AlgorithmStats::DepthSort(outcome.newell(None)),
+        Variant::Matrix => AlgorithmStats::DepthSortMatrix(outcome.matrix(None)),
+    };
     PaintOrder { polygons, stats }
 }
 
@@ -288,15 +323,20 @@ fn order_variant(view: &PreparedView<'_>, options: &RenderOptions, variant: Vari
 /// let (frame, stats) = render(Algorithm::DepthSort, &view, &RenderOptions::default()).unwrap();
 /// let (z, _) = render(Algorithm::ZBuffer, &view, &RenderOptions::default()).unwrap();
 /// assert_eq!(frame.ids, z.ids);
-/// assert!(stats.get("splits").unwrap() > 0.0); // the demo's panels interpenetrate
+/// assert!(stats.depth_sort().unwrap().splits > 0); // the demo's panels interpenetrate
 /// ```
-pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
-    render_variant(view, options, Variant::Newell)
+pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, DepthSortStats)> {
+    let (frame, outcome, paint) = render_variant(view, options, Variant::Newell)?;
+    Ok((frame, outcome.newell(Some(paint))))
 }
 
 /// Renders a prepared view by depth sort with a covering matrix (seed 003).
-pub fn render_matrix(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
-    render_variant(view, options, Variant::Matrix)
+pub fn render_matrix(
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+) -> Result<(Frame, DepthSortMatrixStats)> {
+    let (frame, outcome, paint) = render_variant(view, options, Variant::Matrix)?;
+    Ok((frame, outcome.matrix(Some(paint))))
 }
 
 /// The back-to-front order [`render`] paints, with the pieces of split polygons.

@@ -67,7 +67,8 @@ mod bands;
 mod fast;
 
 use crate::frame::BACKGROUND;
-use crate::surface::{RenderOptions, Stats};
+use crate::surface::RenderOptions;
+use crate::surface::stats::{ZBufferFastStats, ZBufferStats};
 use crate::view::PreparedView;
 use crate::{Frame, Result};
 
@@ -76,7 +77,7 @@ pub use fast::BIG;
 
 /// Renders a prepared view with the z-buffer (the fast implementation; same result as
 /// [`render_reference`]).
-pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
+pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, ZBufferStats)> {
     render_with(view, options, Kernel::detect(), bands::thread_count())
 }
 
@@ -88,7 +89,7 @@ pub fn render_with(
     options: &RenderOptions,
     kernel: Kernel,
     threads: usize,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, ZBufferStats)> {
     let schedule = if threads > 1 {
         Schedule::Bands
     } else {
@@ -112,7 +113,7 @@ fn render_scheduled(
     kernel: Kernel,
     threads: usize,
     schedule: Schedule,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, ZBufferStats)> {
     let bands = match schedule {
         Schedule::Bands => view.viewport().height.div_ceil(bands::BAND_ROWS),
         Schedule::Whole => 1,
@@ -221,29 +222,30 @@ impl Counts {
         }
     }
 
-    fn stats(self, view: &PreparedView<'_>) -> Stats {
-        let mut stats = Stats::default();
-        stats.set("polygons", view.polygon_count() as f64);
-        stats.set("polygons_drawn", self.drawn as f64);
-        stats.set("pixels_tested", self.tested as f64);
-        stats.set("pixels_written", self.written as f64);
-        stats
+    fn stats(self, view: &PreparedView<'_>) -> ZBufferStats {
+        ZBufferStats {
+            polygons: view.polygon_count() as u64,
+            polygons_drawn: self.drawn,
+            pixels_tested: self.tested,
+            pixels_written: self.written,
+            fast: None,
+        }
     }
 
     /// [`Counts::stats`] with the fast path's own figures: the big polygons and the
     /// milliseconds of each phase (summed over bands, so thread time when several
     /// threads draw).
-    fn fast_stats(self, view: &PreparedView<'_>) -> Stats {
-        let mut stats = self.stats(view);
-        stats.set("big_polygons", self.big as f64);
+    fn fast_stats(self, view: &PreparedView<'_>) -> ZBufferStats {
         let ms = |s: f64| (s * 1e5).round() / 100.0;
-        for (name, &s) in ["setup_and_small_ms", "binning_ms", "tiles_ms"]
-            .iter()
-            .zip(&self.seconds)
-        {
-            stats.set(name, ms(s));
+        ZBufferStats {
+            fast: Some(ZBufferFastStats {
+                big_polygons: self.big,
+                setup_and_small_ms: ms(self.seconds[0]),
+                binning_ms: ms(self.seconds[1]),
+                tiles_ms: ms(self.seconds[2]),
+            }),
+            ..self.stats(view)
         }
-        stats
     }
 }
 
@@ -253,7 +255,7 @@ impl Counts {
 pub fn render_reference(
     view: &PreparedView<'_>,
     options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+) -> Result<(Frame, ZBufferStats)> {
     let vp = view.viewport();
     let mut frame = Frame::new(vp)?;
     let w = vp.width as usize;

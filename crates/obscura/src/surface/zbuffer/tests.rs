@@ -112,8 +112,8 @@ const KEY_TIE: f64 = 2.0 * f32::EPSILON as f64;
 /// unit, plus the conversion's rounding), the same polygons drawn and no more pixels
 /// tested (occlusion culling skips some). Returns how many ids differ.
 fn assert_close(
-    a: &(Frame, Stats),
-    b: &(Frame, Stats),
+    a: &(Frame, ZBufferStats),
+    b: &(Frame, ZBufferStats),
     view: &PreparedView<'_>,
     fill: FillRule,
     what: &str,
@@ -129,27 +129,31 @@ fn assert_close(
         let close = x == y || (f64::from(x) - f64::from(y)).abs() <= KEY_TIE * f64::from(y).abs();
         assert!(close, "{what}: depth {x} at {k}, the reference {y}");
     }
-    for stat in ["polygons", "polygons_drawn"] {
-        assert_eq!(a.1.get(stat), b.1.get(stat), "{what}: {stat}");
-    }
-    let tested = |s: &Stats| {
-        s.get("pixels_tested")
-            .unwrap_or_else(|| panic!("{what}: pixels_tested missing"))
-    };
-    assert!(tested(&a.1) <= tested(&b.1), "{what}: pixels tested");
+    assert_eq!(a.1.polygons, b.1.polygons, "{what}: polygons");
+    assert_eq!(
+        a.1.polygons_drawn, b.1.polygons_drawn,
+        "{what}: polygons_drawn"
+    );
+    assert!(
+        a.1.pixels_tested <= b.1.pixels_tested,
+        "{what}: pixels tested"
+    );
     diff.len()
 }
 
 /// Checks that two fast frames are identical, bit for bit (kernels, threads and
 /// schedules must not change the result).
-fn assert_identical(a: &(Frame, Stats), b: &(Frame, Stats), what: &str) {
+fn assert_identical(a: &(Frame, ZBufferStats), b: &(Frame, ZBufferStats), what: &str) {
     assert_eq!(a.0.differences(&b.0), Vec::new(), "{what}: ids differ");
     let bits = |f: &Frame| f.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
     assert!(bits(&a.0) == bits(&b.0), "{what}: depths differ");
     // Everything but the phase times, which are measured.
-    let counts = |s: &Stats| {
+    let counts = |s: &ZBufferStats| {
         let mut s = s.clone();
-        s.entries.retain(|(name, _)| !name.ends_with("_ms"));
+        let fast = s.fast.as_mut().expect("the fast path's figures");
+        fast.setup_and_small_ms = 0.0;
+        fast.binning_ms = 0.0;
+        fast.tiles_ms = 0.0;
         s
     };
     assert_eq!(counts(&a.1), counts(&b.1), "{what}: stats differ");
@@ -301,7 +305,7 @@ fn empty_view_gives_background() {
             render_with(&view, &RenderOptions::default(), Kernel::detect(), threads).unwrap();
         assert!(f.ids.iter().all(|&i| i == BACKGROUND));
         assert!(f.depth.iter().all(|d| *d == f32::INFINITY));
-        assert_eq!(st.get("pixels_tested"), Some(0.0));
+        assert_eq!(st.pixels_tested, 0);
     }
 }
 
@@ -347,7 +351,7 @@ fn hidden_blocks_of_big_polygons_are_culled_without_changing_the_picture() {
             opts.fill_rule,
             &format!("{kernel:?}"),
         );
-        let tested = |r: &(Frame, Stats)| r.1.get("pixels_tested").expect("pixels_tested");
+        let tested = |r: &(Frame, ZBufferStats)| r.1.pixels_tested as f64;
         assert!(
             tested(&fast) < 0.8 * tested(&reference),
             "{kernel:?}: {} of {} pixels tested",
@@ -381,15 +385,17 @@ fn big_polygons_and_phase_times_are_reported() {
             let (_, stats) =
                 render_scheduled(&view, &opts, Kernel::detect(), threads, schedule).unwrap();
             let wall_ms = started.elapsed().as_secs_f64() * 1e3;
-            assert_eq!(stats.get("big_polygons"), Some(big as f64), "{schedule:?}");
+            let fast = stats.fast.expect("the fast path's figures");
+            assert_eq!(fast.big_polygons, big as u64, "{schedule:?}");
             // The phases are measured inside the call and summed over bands: each is a
             // real time, together more than nothing (hundreds of polygons were set up)
             // and at most the call's time on each of its threads.
             let mut total = 0.0;
-            for phase in ["setup_and_small_ms", "binning_ms", "tiles_ms"] {
-                let ms = stats
-                    .get(phase)
-                    .unwrap_or_else(|| panic!("{phase} missing"));
+            for (phase, ms) in [
+                ("setup_and_small_ms", fast.setup_and_small_ms),
+                ("binning_ms", fast.binning_ms),
+                ("tiles_ms", fast.tiles_ms),
+            ] {
                 assert!(ms.is_finite() && ms >= 0.0, "{phase}: {ms}");
                 total += ms;
             }
