@@ -12,7 +12,7 @@
 //! use obscura::{Scene, Viewport, prepare, PrepareOptions};
 //! use obscura::surface::{render, Algorithm, RenderOptions};
 //!
-//! let scene = Scene::load("demo:default")?;
+//! let scene = Scene::demo("default")?;
 //! let viewport = Viewport::new(320, 240)?;
 //! let camera = scene.default_camera(viewport.aspect());
 //! let view = prepare(&scene, &camera, viewport, &PrepareOptions::default())?;

@@ -364,7 +364,7 @@ fn source_files_list_every_file_read_once() {
         canonical(&p)
     );
     // A scene built in memory lists nothing.
-    assert!(Scene::load("demo:cube").unwrap().source_files().is_empty());
+    assert!(Scene::demo("cube").unwrap().source_files().is_empty());
 }
 
 /// Values decoded from an external buffer (another file's bytes) never appear in a

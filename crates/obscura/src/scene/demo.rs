@@ -1,4 +1,5 @@
-//! Built-in demo scenes (`demo:NAME`) and the mesh generators they are made of.
+//! Built-in demo scenes ([`Scene::demo`], the CLI's `demo:NAME`) and the mesh generators
+//! they are made of.
 //!
 //! | name | what | size |
 //! | --- | --- | --- |
@@ -19,7 +20,7 @@ use glam::{DMat4, DVec3};
 use super::{Camera, Mesh, MeshBuilder, ObjectDesc, Scene};
 use crate::{Error, Result};
 
-/// The names `demo:NAME` accepts.
+/// The names [`Scene::demo`] (and the CLI's `demo:NAME`) accepts.
 pub const NAMES: [&str; 6] = [
     "default",
     "seed-task",
