@@ -37,7 +37,7 @@ pub mod cull;
 mod error;
 pub mod frame;
 pub mod geom;
-pub mod memory;
+mod memory;
 pub mod raster;
 pub mod scene;
 pub mod surface;

@@ -4,7 +4,9 @@
 
 use std::path::PathBuf;
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 use obscura::scene::load::LoadOptions;
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 use obscura::scene::load::toml_scene::{MAX_PLACED_FACES, PLACED_FACE_BYTES, PLACED_VERTEX_BYTES};
 use obscura::scene::random::random_triangles;
 use obscura::scene::{Scene, Viewport, demo};
@@ -158,6 +160,7 @@ fn a_prepared_view_over_the_budget_is_refused() {
     assert!(bytes >= 2000 * 3 * 32, "{bytes}");
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 /// An OBJ of a flat grid of `n x n` quads as `2 n^2` triangles; returns (faces,
 /// vertices).
 fn write_grid_obj(path: &PathBuf, n: usize) -> (u64, u64) {
@@ -178,6 +181,7 @@ fn write_grid_obj(path: &PathBuf, n: usize) -> (u64, u64) {
     (2 * (n * n) as u64, ((n + 1) * (n + 1)) as u64)
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 /// A scene file placing `mesh` `count` times, one table of 3 lines each after a
 /// 1-line header comment: table `k` (0-based) starts on line `2 + 3 k`.
 fn write_placements(path: &PathBuf, mesh: &str, count: usize) {
@@ -188,6 +192,7 @@ fn write_placements(path: &PathBuf, mesh: &str, count: usize) {
     std::fs::write(path, s).unwrap();
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 #[test]
 fn scene_file_placements_over_the_face_cap_are_refused_at_their_line() {
     let dir = tempdir("toml-cap");
@@ -219,6 +224,7 @@ fn scene_file_placements_over_the_face_cap_are_refused_at_their_line() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 #[test]
 fn scene_file_placements_over_the_budget_are_refused_naming_the_file_and_line() {
     let dir = tempdir("toml-budget");

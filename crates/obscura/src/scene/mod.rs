@@ -8,7 +8,9 @@
 //! degenerate face keeps its id too (it just never appears in an image).
 
 mod adjacency;
+mod arrays;
 mod camera;
+mod camera_matrices;
 pub mod demo;
 pub mod load;
 mod mesh;
@@ -20,7 +22,9 @@ use std::sync::Arc;
 use glam::{DMat4, DVec3};
 
 pub use adjacency::{EdgeAdjacency, MeshEdge, is_convex_closed};
+pub use arrays::Faces;
 pub use camera::{Camera, Projection, Ray, Viewport};
+pub use camera_matrices::Intrinsics;
 
 /// The largest magnitude of a world coordinate (and of a camera's position and planes)
 /// that obscura accepts. Its single-precision structures (the `f32` depth keys, the
