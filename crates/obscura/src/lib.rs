@@ -32,6 +32,8 @@
 pub mod accel;
 pub mod budget;
 pub mod clip;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod cpu;
 pub mod cull;
 mod error;

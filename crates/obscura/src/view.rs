@@ -205,7 +205,7 @@ impl ViewTransform {
     /// [`Camera::near_limit`]).
     #[inline]
     #[must_use]
-    pub fn eye_to_clip(&self, eye: DVec3) -> DVec4 {
+    pub(crate) fn eye_to_clip(&self, eye: DVec3) -> DVec4 {
         let c = self.projection * eye.extend(1.0);
         DVec4::new(c.x, c.y, self.near_z(c.w, -eye.z), c.w)
     }
@@ -213,14 +213,14 @@ impl ViewTransform {
     /// The clip `z` of a point of depth `depth` and clip `w` (see [`Self::eye_to_clip`]).
     #[inline(always)]
     #[must_use]
-    pub fn near_z(&self, w: f64, depth: f64) -> f64 {
+    pub(crate) fn near_z(&self, w: f64, depth: f64) -> f64 {
         -w + self.near_scale * (depth - self.near_limit)
     }
 
     /// Object to eye space for an object placed by `model` (an affine map), relative
     /// to the camera (see the type's doc).
     #[must_use]
-    pub fn model_view(&self, model: &DMat4) -> ModelView {
+    pub(crate) fn model_view(&self, model: &DMat4) -> ModelView {
         ModelView {
             linear: DMat3::from_mat4(*model),
             shift: model.w_axis.truncate() - self.eye,
@@ -231,21 +231,21 @@ impl ViewTransform {
     /// A world point in eye space, relative to the camera (see the type's doc).
     #[inline]
     #[must_use]
-    pub fn world_to_eye(&self, p: DVec3) -> DVec3 {
+    pub(crate) fn world_to_eye(&self, p: DVec3) -> DVec3 {
         self.rotation * (p - self.eye)
     }
 
     /// A world point in clip space: [`Self::world_to_eye`], then the projection.
     #[inline]
     #[must_use]
-    pub fn world_to_clip(&self, p: DVec3) -> DVec4 {
+    pub(crate) fn world_to_clip(&self, p: DVec3) -> DVec4 {
         self.eye_to_clip(self.world_to_eye(p))
     }
 
     /// The six planes of the view volume in eye space (see [`frustum_planes`]), for
     /// [`Self::object_containment`].
     #[must_use]
-    pub fn eye_frustum_planes(&self) -> [DVec4; 6] {
+    pub(crate) fn eye_frustum_planes(&self) -> [DVec4; 6] {
         frustum_planes(&self.projection)
     }
 
@@ -255,7 +255,7 @@ impl ViewTransform {
     /// taken to eye space relative to the camera, so the test stays conservative
     /// however far the scene is from the origin.
     #[must_use]
-    pub fn object_containment(&self, planes: &[DVec4; 6], o: &Object) -> Containment {
+    pub(crate) fn object_containment(&self, planes: &[DVec4; 6], o: &Object) -> Containment {
         let sphere = Sphere {
             center: self.world_to_eye(o.sphere.center),
             radius: o.sphere.radius,
@@ -272,7 +272,7 @@ impl ViewTransform {
     /// The depth key of an eye-space depth.
     #[inline]
     #[must_use]
-    pub fn zq_of_depth(&self, depth: f64) -> f64 {
+    pub(crate) fn zq_of_depth(&self, depth: f64) -> f64 {
         if self.orthographic {
             (self.far - depth) / (self.far - self.near)
         } else {
@@ -336,7 +336,7 @@ impl ViewTransform {
     /// through eye-space `point` is seen from behind.
     #[inline]
     #[must_use]
-    pub fn is_back_facing_eye(&self, normal: DVec3, point: DVec3) -> bool {
+    pub(crate) fn is_back_facing_eye(&self, normal: DVec3, point: DVec3) -> bool {
         if self.orthographic {
             crate::cull::backface::is_back_facing_parallel(normal, -DVec3::Z)
         } else {
@@ -348,7 +348,11 @@ impl ViewTransform {
     /// appending the screen vertices to `out`. Returns how many were appended (0 when
     /// nothing is visible). For object-space algorithms that make new polygons (BSP
     /// fragments, depth-sort splits).
-    pub fn clip_and_project(&self, eye_points: &[DVec3], out: &mut Vec<ViewVertex>) -> usize {
+    pub(crate) fn clip_and_project(
+        &self,
+        eye_points: &[DVec3],
+        out: &mut Vec<ViewVertex>,
+    ) -> usize {
         let input: Vec<ClipEyeVertex> = eye_points
             .iter()
             .map(|&e| ClipEyeVertex {
@@ -845,7 +849,7 @@ fn checked_transform(scene: &Scene, camera: &Camera, viewport: Viewport) -> Resu
 /// 0.001), and with `far` 1e20 the clip coordinates put the whole scene on the near
 /// plane. Perspective keys (`near / depth`) keep their relative precision at any depth.
 #[must_use]
-pub fn fitted_orthographic_planes(scene: &Scene, camera: &Camera) -> Option<Camera> {
+pub(crate) fn fitted_orthographic_planes(scene: &Scene, camera: &Camera) -> Option<Camera> {
     if !matches!(camera.projection, Projection::Orthographic { .. }) {
         return None;
     }

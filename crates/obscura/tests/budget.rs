@@ -2,6 +2,7 @@
 //! refused before it is allocated, or stopped while it grows, with an error naming it.
 //! Every input is generated here.
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 use std::path::PathBuf;
 
 #[cfg(all(feature = "obj", feature = "toml-scene"))]
@@ -13,6 +14,7 @@ use obscura::scene::{Scene, Viewport, demo};
 use obscura::surface::{Algorithm, RenderOptions, render};
 use obscura::{Error, PrepareOptions, prepare};
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 fn tempdir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("obscura-budget-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();

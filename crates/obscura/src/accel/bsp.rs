@@ -274,7 +274,7 @@ impl Viewpoint {
 
     /// The viewpoint of a camera.
     #[must_use]
-    pub fn of_camera(camera: &Camera) -> Self {
+    pub(crate) fn of_camera(camera: &Camera) -> Self {
         match camera.projection {
             Projection::Perspective { .. } => Viewpoint::Point(camera.eye),
             Projection::Orthographic { .. } => Viewpoint::Direction(camera.eye - camera.target),
@@ -323,7 +323,7 @@ pub struct BspVertex {
 impl BspVertex {
     /// The mesh vertex index, `None` for a vertex made by a split.
     #[must_use]
-    pub fn mesh_vertex(&self) -> Option<u32> {
+    pub(crate) fn mesh_vertex(&self) -> Option<u32> {
         (self.local != MADE_BY_SPLIT).then_some(self.local)
     }
 }
@@ -981,14 +981,14 @@ impl BspTree {
 
     /// The vertex indices (into [`BspTree::vertices`]) of fragment `i`.
     #[must_use]
-    pub fn fragment_vertex_indices(&self, i: u32) -> &[u32] {
+    pub(crate) fn fragment_vertex_indices(&self, i: u32) -> &[u32] {
         self.fragment_indices(&self.fragments[i as usize])
     }
 
     /// The fragment of the whole polygon fragment `i` is a piece of (`i` itself if the
     /// polygon was never split).
     #[must_use]
-    pub fn fragment_root(&self, i: u32) -> u32 {
+    pub(crate) fn fragment_root(&self, i: u32) -> u32 {
         self.fragments[i as usize].root
     }
 
@@ -999,7 +999,7 @@ impl BspTree {
     /// (up to the rounding of its vertices): the painter draws it so, as the whole
     /// polygon's pixels on those sides, and the pieces of one polygon then cover each
     /// of its pixels exactly once (see [`crate::surface::bsp`]).
-    pub fn fragment_cuts(&self, i: u32) -> impl ExactSizeIterator<Item = (u32, bool)> + '_ {
+    pub(crate) fn fragment_cuts(&self, i: u32) -> impl ExactSizeIterator<Item = (u32, bool)> + '_ {
         let f = &self.fragments[i as usize];
         self.cuts[f.cut_start as usize..(f.cut_start + f.cut_len) as usize]
             .iter()
@@ -1023,7 +1023,7 @@ impl BspTree {
 
     /// Index in [`BspTree::vertices`] of object `k`'s mesh vertex 0.
     #[must_use]
-    pub fn object_vertex_base(&self, k: usize) -> u32 {
+    pub(crate) fn object_vertex_base(&self, k: usize) -> u32 {
         self.vertex_base[k]
     }
 
@@ -1079,7 +1079,7 @@ impl BspTree {
 
     /// [`BspTree::traverse`] with a visitor that may also skip whole subtrees
     /// ([`BspVisitor::enter`]).
-    pub fn traverse_with<V: BspVisitor>(
+    pub(crate) fn traverse_with<V: BspVisitor>(
         &self,
         viewpoint: Viewpoint,
         traversal: BspTraversal,
@@ -1140,13 +1140,13 @@ impl BspTree {
 
     /// The world-space box of every fragment in node `i`'s subtree.
     #[must_use]
-    pub fn subtree_bounds(&self, i: u32) -> &Aabb {
+    pub(crate) fn subtree_bounds(&self, i: u32) -> &Aabb {
         &self.subtree_bounds[i as usize]
     }
 
     /// The number of fragments in node `i`'s subtree.
     #[must_use]
-    pub fn subtree_fragments(&self, i: u32) -> u32 {
+    pub(crate) fn subtree_fragments(&self, i: u32) -> u32 {
         self.subtree_counts[i as usize]
     }
 

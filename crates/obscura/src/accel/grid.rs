@@ -107,7 +107,7 @@ impl GridOptions {
     /// These options for rays whose origins have coordinates up to `magnitude` in
     /// absolute value.
     #[must_use]
-    pub fn with_ray_origins(mut self, magnitude: f64) -> Self {
+    pub(crate) fn with_ray_origins(mut self, magnitude: f64) -> Self {
         self.ray_origins = magnitude;
         self
     }
@@ -126,7 +126,7 @@ impl Default for GridOptions {
 /// The rounding bound of the traversal, relative to the coordinates involved: a ray
 /// from `o` locates its hits and the cells' faces to within
 /// `τ = ROUNDING (|o|∞ + |bounds|∞)` (see "Rounding" in the module doc).
-pub const ROUNDING: f64 = 64.0 * f64::EPSILON;
+pub(crate) const ROUNDING: f64 = 64.0 * f64::EPSILON;
 
 /// Figures of a build.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -225,7 +225,7 @@ pub struct GridHit {
 }
 
 /// The structure named by the grid's budget errors.
-pub const GRID_STRUCTURE: &str = "ray-casting grid cell references";
+pub(crate) const GRID_STRUCTURE: &str = "ray-casting grid cell references";
 
 impl UniformGrid {
     /// Builds the grid over the triangles.
@@ -241,7 +241,7 @@ impl UniformGrid {
     /// spanning many cells multiply them) and the build stops with an
     /// [`crate::Error::Budget`] when they, the cell table and the sorted references
     /// would pass it.
-    pub fn build_with_budget(
+    pub(crate) fn build_with_budget(
         triangles: &SceneTriangles,
         options: &GridOptions,
         budget: &crate::budget::MemoryBudget,
@@ -657,7 +657,7 @@ fn resolution(e: DVec3, n: usize, options: &GridOptions, min_cell: f64) -> [u32;
 /// (Akenine-Möller 2001): the box normals, the triangle normal, and the 9 cross
 /// products of box axes with triangle edges. Touching counts as overlapping.
 #[must_use]
-pub fn triangle_overlaps_box(tri: &[DVec3; 3], center: DVec3, half: DVec3) -> bool {
+pub(crate) fn triangle_overlaps_box(tri: &[DVec3; 3], center: DVec3, half: DVec3) -> bool {
     let v = tri.map(|p| p - center);
     for k in 0..3 {
         let lo = v[0][k].min(v[1][k]).min(v[2][k]);

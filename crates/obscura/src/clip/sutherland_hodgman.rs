@@ -133,7 +133,7 @@ impl ClipPlane {
     /// The plane of an outcode bit (`OUT_LEFT` ... `OUT_FAR`); `None` for anything
     /// that is not exactly one of those six bits.
     #[must_use]
-    pub fn from_outcode_bit(bit: u8) -> Option<ClipPlane> {
+    pub(crate) fn from_outcode_bit(bit: u8) -> Option<ClipPlane> {
         Some(match bit {
             super::OUT_LEFT => ClipPlane::Left,
             super::OUT_RIGHT => ClipPlane::Right,
@@ -177,7 +177,7 @@ impl ClipPlane {
     /// floating point may land a few ulps off the plane.
     #[inline]
     #[must_use]
-    pub fn snap_onto(self, mut v: DVec4) -> DVec4 {
+    pub(crate) fn snap_onto(self, mut v: DVec4) -> DVec4 {
         match self {
             ClipPlane::Left => v.x = -v.w,
             ClipPlane::Right => v.x = v.w,
@@ -191,7 +191,7 @@ impl ClipPlane {
 
     /// The outcode bit of this plane.
     #[must_use]
-    pub fn outcode_bit(self) -> u8 {
+    pub(crate) fn outcode_bit(self) -> u8 {
         match self {
             ClipPlane::Left => super::OUT_LEFT,
             ClipPlane::Right => super::OUT_RIGHT,

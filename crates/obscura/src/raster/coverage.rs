@@ -87,7 +87,7 @@ impl EdgeFunction {
     /// The part of the raw value that depends on the row: `dx * (py - oy)`.
     #[inline(always)]
     #[must_use]
-    pub fn row_term(&self, py: f64) -> f64 {
+    pub(crate) fn row_term(&self, py: f64) -> f64 {
         self.dx * (py - self.oy)
     }
 
@@ -108,7 +108,7 @@ impl EdgeFunction {
     /// Whether `px` is inside, given the row term of the sample's row.
     #[inline(always)]
     #[must_use]
-    pub fn inside_row(&self, px: f64, row_term: f64) -> bool {
+    pub(crate) fn inside_row(&self, px: f64, row_term: f64) -> bool {
         let e = self.sign * self.raw(px, row_term);
         e > 0.0 || (e == 0.0 && self.include_zero)
     }

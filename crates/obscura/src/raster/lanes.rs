@@ -23,13 +23,13 @@
 /// The smallest key a drawn pixel stores (the smallest positive `f32`): keys at or
 /// below zero (possible only at the far plane of an orthographic view) still beat the
 /// empty buffer.
-pub const MIN_KEY: f32 = f32::from_bits(1);
+pub(crate) const MIN_KEY: f32 = f32::from_bits(1);
 
 /// The key stored for the depth key `z`: `z` rounded to `f32`, at least [`MIN_KEY`]
 /// (NaN stays NaN, and is never stored: it fails every comparison).
 #[inline(always)]
 #[must_use]
-pub fn key_of(z: f64) -> f32 {
+pub(crate) fn key_of(z: f64) -> f32 {
     let k = z as f32;
     // The operand order of x86's `max`: the second operand when either is NaN.
     if MIN_KEY > k { MIN_KEY } else { k }
@@ -168,14 +168,14 @@ pub trait Lanes: Copy {
 /// The mask of the lanes `0..n` (all for `n >= 8`).
 #[inline(always)]
 #[must_use]
-pub fn lanes_below(n: usize) -> u8 {
+pub(crate) fn lanes_below(n: usize) -> u8 {
     if n >= 8 { 0xff } else { (1u8 << n) - 1 }
 }
 
 /// The mask of the lanes `0..n` of sixteen (all for `n >= 16`).
 #[inline(always)]
 #[must_use]
-pub fn lanes_below16(n: usize) -> u16 {
+pub(crate) fn lanes_below16(n: usize) -> u16 {
     if n >= 16 { 0xffff } else { (1u16 << n) - 1 }
 }
 

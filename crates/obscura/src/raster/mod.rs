@@ -7,10 +7,16 @@
 //! the test suite demand identical id images.
 
 #[cfg(target_arch = "x86_64")]
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod avx512;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod block;
 mod coverage;
 mod depth_plane;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod lanes;
 mod setup;
 

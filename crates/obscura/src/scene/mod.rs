@@ -14,6 +14,8 @@ mod camera_matrices;
 pub mod demo;
 pub mod load;
 mod mesh;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod random;
 
 use std::path::{Path, PathBuf};

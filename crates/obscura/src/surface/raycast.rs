@@ -151,7 +151,7 @@ pub fn render(
 }
 
 /// Brute force: every ray against every triangle (seed 000's `RayCasting`).
-pub fn render_brute_force(
+pub(crate) fn render_brute_force(
     view: &PreparedView<'_>,
     triangles: &SceneTriangles,
     options: &RenderOptions,
@@ -267,7 +267,7 @@ fn ray_sphere(s: &Sphere, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
 /// object's volume cannot hit the object. The objects whose volume it meets are tested
 /// nearest volume first, and the search stops at a volume that starts behind the
 /// nearest hit found.
-pub fn render_bounds(
+pub(crate) fn render_bounds(
     view: &PreparedView<'_>,
     triangles: &SceneTriangles,
     kind: BoundsKind,

@@ -37,7 +37,11 @@
 
 mod build;
 mod lanes;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod packet;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod traverse;
 
 use std::time::Instant;
@@ -56,7 +60,7 @@ pub const MAX_DEPTH: usize = 96;
 pub const WIDTH: usize = 8;
 
 /// The largest leaf (triangles in one slot).
-pub const MAX_LEAF_SIZE: usize = 16;
+pub(crate) const MAX_LEAF_SIZE: usize = 16;
 
 /// Build parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -132,7 +136,7 @@ impl BvhNode {
     /// while the ray's numbers are finite in `f32`.
     #[inline(always)]
     #[must_use]
-    pub fn occupied(&self) -> u32 {
+    pub(crate) fn occupied(&self) -> u32 {
         (0..WIDTH).fold(0, |c, k| {
             c | u32::from(self.child[k] != EMPTY_CHILD || self.count[k] != 0) << k
         })
