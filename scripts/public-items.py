@@ -11,13 +11,19 @@ Clone, ...) and items only visible with `#[doc(hidden)]` are not counted.
 
     CARGO_TARGET_DIR=target/nightly-doc cargo +nightly rustdoc -p obscura --lib \
         -- -Z unstable-options --output-format json
-    scripts/public-items.py target/nightly-doc/doc/obscura.json
+    scripts/public-items.py target/nightly-doc/doc/obscura.json [--include-hidden]
+
+rustdoc leaves `#[doc(hidden)]` items out of its JSON; to count them too (they stay
+reachable by path), generate it with `--document-hidden-items` added after
+`--output-format json` and pass `--include-hidden`.
 """
 import collections
 import json
 import sys
 
-doc = json.load(open(sys.argv[1] if len(sys.argv) > 1 else "target/nightly-doc/doc/obscura.json"))
+args = [a for a in sys.argv[1:] if not a.startswith("--")]
+include_hidden = "--include-hidden" in sys.argv
+doc = json.load(open(args[0] if args else "target/nightly-doc/doc/obscura.json"))
 index = doc["index"]
 seen = set()
 counts = collections.Counter()
@@ -29,6 +35,8 @@ def public(item):
 
 
 def hidden(item):
+    if include_hidden:
+        return False
     return any("hidden" in str(a) for a in item.get("attrs", []))
 
 
