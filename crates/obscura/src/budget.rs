@@ -41,7 +41,7 @@ use std::sync::OnceLock;
 use crate::{Error, Result};
 
 /// The default limit where the memory available is unknown: 4 GiB.
-pub(crate) const FALLBACK_LIMIT: u64 = 4 << 30;
+pub const FALLBACK_LIMIT: u64 = 4 << 30;
 
 /// The fraction of the memory available that the default budget takes: one half.
 pub(crate) const DEFAULT_FRACTION_DIVISOR: u64 = 2;
@@ -89,7 +89,7 @@ impl MemoryBudget {
     /// The default limit: half of the memory available (see the module doc), read once
     /// per process.
     #[must_use]
-    pub(crate) fn default_limit() -> u64 {
+    pub fn default_limit() -> u64 {
         static DEFAULT: OnceLock<u64> = OnceLock::new();
         *DEFAULT.get_or_init(|| default_for(available_to_process()))
     }

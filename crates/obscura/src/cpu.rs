@@ -78,7 +78,7 @@ impl Avx512 {
 }
 
 /// The environment variable that turns a skipped SIMD comparison into a failure.
-pub(crate) const REQUIRE_SIMD_VAR: &str = "OBSCURA_REQUIRE_SIMD";
+pub const REQUIRE_SIMD_VAR: &str = "OBSCURA_REQUIRE_SIMD";
 
 /// For tests: reports that the comparison `what` of a vector kernel with its portable
 /// twin was skipped because this processor lacks `kernel`'s instructions.

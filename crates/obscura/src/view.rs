@@ -220,7 +220,7 @@ impl ViewTransform {
     /// Object to eye space for an object placed by `model` (an affine map), relative
     /// to the camera (see the type's doc).
     #[must_use]
-    pub(crate) fn model_view(&self, model: &DMat4) -> ModelView {
+    pub fn model_view(&self, model: &DMat4) -> ModelView {
         ModelView {
             linear: DMat3::from_mat4(*model),
             shift: model.w_axis.truncate() - self.eye,
@@ -231,7 +231,7 @@ impl ViewTransform {
     /// A world point in eye space, relative to the camera (see the type's doc).
     #[inline]
     #[must_use]
-    pub(crate) fn world_to_eye(&self, p: DVec3) -> DVec3 {
+    pub fn world_to_eye(&self, p: DVec3) -> DVec3 {
         self.rotation * (p - self.eye)
     }
 
@@ -255,7 +255,7 @@ impl ViewTransform {
     /// taken to eye space relative to the camera, so the test stays conservative
     /// however far the scene is from the origin.
     #[must_use]
-    pub(crate) fn object_containment(&self, planes: &[DVec4; 6], o: &Object) -> Containment {
+    pub fn object_containment(&self, planes: &[DVec4; 6], o: &Object) -> Containment {
         let sphere = Sphere {
             center: self.world_to_eye(o.sphere.center),
             radius: o.sphere.radius,
@@ -348,11 +348,7 @@ impl ViewTransform {
     /// appending the screen vertices to `out`. Returns how many were appended (0 when
     /// nothing is visible). For object-space algorithms that make new polygons (BSP
     /// fragments, depth-sort splits).
-    pub(crate) fn clip_and_project(
-        &self,
-        eye_points: &[DVec3],
-        out: &mut Vec<ViewVertex>,
-    ) -> usize {
+    pub fn clip_and_project(&self, eye_points: &[DVec3], out: &mut Vec<ViewVertex>) -> usize {
         let input: Vec<ClipEyeVertex> = eye_points
             .iter()
             .map(|&e| ClipEyeVertex {
@@ -849,7 +845,7 @@ fn checked_transform(scene: &Scene, camera: &Camera, viewport: Viewport) -> Resu
 /// 0.001), and with `far` 1e20 the clip coordinates put the whole scene on the near
 /// plane. Perspective keys (`near / depth`) keep their relative precision at any depth.
 #[must_use]
-pub(crate) fn fitted_orthographic_planes(scene: &Scene, camera: &Camera) -> Option<Camera> {
+pub fn fitted_orthographic_planes(scene: &Scene, camera: &Camera) -> Option<Camera> {
     if !matches!(camera.projection, Projection::Orthographic { .. }) {
         return None;
     }

@@ -999,7 +999,7 @@ impl BspTree {
     /// (up to the rounding of its vertices): the painter draws it so, as the whole
     /// polygon's pixels on those sides, and the pieces of one polygon then cover each
     /// of its pixels exactly once (see [`crate::surface::bsp`]).
-    pub(crate) fn fragment_cuts(&self, i: u32) -> impl ExactSizeIterator<Item = (u32, bool)> + '_ {
+    pub fn fragment_cuts(&self, i: u32) -> impl ExactSizeIterator<Item = (u32, bool)> + '_ {
         let f = &self.fragments[i as usize];
         self.cuts[f.cut_start as usize..(f.cut_start + f.cut_len) as usize]
             .iter()
@@ -1079,7 +1079,7 @@ impl BspTree {
 
     /// [`BspTree::traverse`] with a visitor that may also skip whole subtrees
     /// ([`BspVisitor::enter`]).
-    pub(crate) fn traverse_with<V: BspVisitor>(
+    pub fn traverse_with<V: BspVisitor>(
         &self,
         viewpoint: Viewpoint,
         traversal: BspTraversal,

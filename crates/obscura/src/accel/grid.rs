@@ -126,7 +126,7 @@ impl Default for GridOptions {
 /// The rounding bound of the traversal, relative to the coordinates involved: a ray
 /// from `o` locates its hits and the cells' faces to within
 /// `τ = ROUNDING (|o|∞ + |bounds|∞)` (see "Rounding" in the module doc).
-pub(crate) const ROUNDING: f64 = 64.0 * f64::EPSILON;
+pub const ROUNDING: f64 = 64.0 * f64::EPSILON;
 
 /// Figures of a build.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -30,7 +30,7 @@ use glam::DVec3;
 use super::obb::slab;
 
 /// The 13 directions of the 26-DOP: axes, cube diagonals, edge diagonals.
-pub(crate) const KDOP_AXES: [DVec3; 13] = [
+pub const KDOP_AXES: [DVec3; 13] = [
     DVec3::new(1.0, 0.0, 0.0),
     DVec3::new(0.0, 1.0, 0.0),
     DVec3::new(0.0, 0.0, 1.0),

@@ -68,7 +68,7 @@ use super::lanes::{Lanes, key_of, lanes_below, lanes_below16};
 use super::{DepthPlane, EdgeFunction, FillRule, PixelRect};
 
 /// The most edges a [`BlockSetup`] holds (one lane each when blocks are classified).
-pub(crate) const MAX_EDGES: usize = 8;
+pub const MAX_EDGES: usize = 8;
 
 /// Rows of a block, and columns of a narrow one (a wide block has twice as many).
 pub const BLOCK: u32 = 8;
@@ -281,12 +281,7 @@ fn whole_to_u32(v: f64) -> u32 {
 /// vectorizes it, about three times cheaper per triangle than [`triangle`].
 #[inline(always)]
 #[must_use]
-pub(crate) fn triangles8(
-    p: &TrianglePoints,
-    fill: FillRule,
-    width: u32,
-    height: u32,
-) -> TriangleBatch {
+pub fn triangles8(p: &TrianglePoints, fill: FillRule, width: u32, height: u32) -> TriangleBatch {
     let (x, y, zq) = (&p.x, &p.y, &p.zq);
     // triangle_rect_and_area
     let minx = lanes(|l| x[0][l].min(x[1][l]).min(x[2][l]));
@@ -424,7 +419,7 @@ impl<'a> BlockTarget<'a> {
     /// value computed before stays valid (only less effective); [`draw`] recomputes
     /// the value of each whole block it writes to.
     #[must_use]
-    pub(crate) fn with_farthest(mut self, farthest: &'a mut [f32]) -> Self {
+    pub fn with_farthest(mut self, farthest: &'a mut [f32]) -> Self {
         self.farthest = farthest;
         self
     }

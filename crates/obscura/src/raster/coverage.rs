@@ -108,7 +108,7 @@ impl EdgeFunction {
     /// Whether `px` is inside, given the row term of the sample's row.
     #[inline(always)]
     #[must_use]
-    pub(crate) fn inside_row(&self, px: f64, row_term: f64) -> bool {
+    pub fn inside_row(&self, px: f64, row_term: f64) -> bool {
         let e = self.sign * self.raw(px, row_term);
         e > 0.0 || (e == 0.0 && self.include_zero)
     }

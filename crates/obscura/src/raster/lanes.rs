@@ -23,13 +23,13 @@
 /// The smallest key a drawn pixel stores (the smallest positive `f32`): keys at or
 /// below zero (possible only at the far plane of an orthographic view) still beat the
 /// empty buffer.
-pub(crate) const MIN_KEY: f32 = f32::from_bits(1);
+pub const MIN_KEY: f32 = f32::from_bits(1);
 
 /// The key stored for the depth key `z`: `z` rounded to `f32`, at least [`MIN_KEY`]
 /// (NaN stays NaN, and is never stored: it fails every comparison).
 #[inline(always)]
 #[must_use]
-pub(crate) fn key_of(z: f64) -> f32 {
+pub fn key_of(z: f64) -> f32 {
     let k = z as f32;
     // The operand order of x86's `max`: the second operand when either is NaN.
     if MIN_KEY > k { MIN_KEY } else { k }

@@ -60,7 +60,7 @@ pub const MAX_DEPTH: usize = 96;
 pub const WIDTH: usize = 8;
 
 /// The largest leaf (triangles in one slot).
-pub(crate) const MAX_LEAF_SIZE: usize = 16;
+pub const MAX_LEAF_SIZE: usize = 16;
 
 /// Build parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]

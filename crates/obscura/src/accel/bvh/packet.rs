@@ -413,7 +413,7 @@ struct Hits {
 impl Bvh {
     /// The nearest hit of every ray of the packet with `ctx.t_min <= t <= t_max`
     /// (lanes without a ray: no hit), each equal to [`Bvh::closest_hit`]'s.
-    pub(crate) fn closest_hits(
+    pub fn closest_hits(
         &self,
         packet: &RayPacket,
         ctx: &PacketContext<'_>,

@@ -95,13 +95,13 @@ pub const MAX_DEPTH: u32 = 10;
 
 /// The deepest grid [`Octree::from_fn`] accepts (16.7 million voxels, about 300 MB
 /// while it is merged).
-pub(crate) const FROM_FN_MAX_DEPTH: u32 = 8;
+pub const FROM_FN_MAX_DEPTH: u32 = 8;
 
 /// "No node": the parent of the root, the first child of a leaf.
 pub(crate) const NONE: u32 = u32::MAX;
 
 /// No face: the face of nodes that are not partial.
-pub(crate) const NO_FACE: u32 = u32::MAX;
+pub const NO_FACE: u32 = u32::MAX;
 
 /// What a node is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

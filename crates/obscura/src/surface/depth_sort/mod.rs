@@ -294,10 +294,7 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
 }
 
 /// Renders a prepared view by depth sort with a covering matrix (seed 003).
-pub(crate) fn render_matrix(
-    view: &PreparedView<'_>,
-    options: &RenderOptions,
-) -> Result<(Frame, Stats)> {
+pub fn render_matrix(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame, Stats)> {
     render_variant(view, options, Variant::Matrix)
 }
 
