@@ -106,7 +106,7 @@ impl MemoryBudget {
 
     /// [`MemoryBudget::check`] for `count` items of `bytes_each` (the product
     /// saturates).
-    pub(crate) fn check_items(&self, structure: &str, count: u64, bytes_each: u64) -> Result<()> {
+    pub fn check_items(&self, structure: &str, count: u64, bytes_each: u64) -> Result<()> {
         self.check(structure, count, count.saturating_mul(bytes_each))
     }
 
