@@ -350,7 +350,11 @@ impl ViewArgs {
             .clone()
             .unwrap_or_else(|| "demo:default".to_string());
         let start = Instant::now();
-        let scene = Scene::load_with(&spec, &self.load_options())?;
+        // `demo:NAME` is the CLI's spelling of a built-in scene; anything else is a path.
+        let scene = match spec.strip_prefix("demo:") {
+            Some(name) => Scene::demo(name)?,
+            None => Scene::load_with(&spec, &self.load_options())?,
+        };
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
         scene.ensure_not_empty(&spec)?;
         for w in scene.report().warnings() {

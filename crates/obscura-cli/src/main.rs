@@ -1,5 +1,6 @@
 //! `obscura`: render, compare and benchmark visibility algorithms from the command line.
 
+mod allocator;
 mod bench;
 mod common;
 mod compare;
@@ -17,7 +18,7 @@ use crate::out::errln;
 /// Large buffers (the loaded scene, the prepared view, the frame) in whole huge pages:
 /// a one-shot run otherwise spends milliseconds on page faults at their ends.
 #[global_allocator]
-static ALLOCATOR: obscura::memory::HugePageAllocator = obscura::memory::HugePageAllocator::new();
+static ALLOCATOR: allocator::HugePageAllocator = allocator::HugePageAllocator::new();
 
 /// What can be seen? Clipping, culling and hidden-surface removal, every classical
 /// algorithm behind one interface.

@@ -28,7 +28,7 @@ fn scenes() -> Vec<(String, Scene, Camera)> {
         out.push((name.to_string(), scene, cam));
     }
     let sponza = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/sponza.obj");
-    if let Ok(scene) = Scene::load(&sponza.to_string_lossy()) {
+    if let Ok(scene) = Scene::load(&sponza) {
         let cam = Camera::perspective(
             DVec3::new(0.0, -10.0, 2.0),
             DVec3::new(0.0, 10.0, 4.0),

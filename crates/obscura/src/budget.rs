@@ -44,7 +44,7 @@ use crate::{Error, Result};
 pub const FALLBACK_LIMIT: u64 = 4 << 30;
 
 /// The fraction of the memory available that the default budget takes: one half.
-pub const DEFAULT_FRACTION_DIVISOR: u64 = 2;
+pub(crate) const DEFAULT_FRACTION_DIVISOR: u64 = 2;
 
 /// A memory limit in bytes, checked by the structures of a run.
 ///
@@ -76,7 +76,7 @@ impl MemoryBudget {
 
     /// The budget an option asks for: `Some(bytes)`, or the default when `None`.
     #[must_use]
-    pub fn from_option(limit: Option<u64>) -> Self {
+    pub(crate) fn from_option(limit: Option<u64>) -> Self {
         limit.map_or_else(MemoryBudget::default, MemoryBudget::new)
     }
 
@@ -112,7 +112,7 @@ impl MemoryBudget {
 
     /// The error of a structure that needs `bytes`, over this budget.
     #[must_use]
-    pub fn exceeded(&self, structure: &str, count: u64, bytes: u64) -> Error {
+    pub(crate) fn exceeded(&self, structure: &str, count: u64, bytes: u64) -> Error {
         Error::Budget {
             structure: structure.to_string(),
             count,
@@ -143,7 +143,7 @@ pub fn try_vec<T>(budget: &MemoryBudget, structure: &str, n: usize) -> Result<Ve
 
 /// Reserves room for `more` elements in `v`, or an [`Error::Budget`] naming `structure`
 /// when the allocator refuses (the count reached is `v.len() + more`).
-pub fn try_grow<T>(
+pub(crate) fn try_grow<T>(
     budget: &MemoryBudget,
     structure: &str,
     v: &mut Vec<T>,
@@ -159,7 +159,7 @@ pub fn try_grow<T>(
 /// available memory, the cgroup's room and the process's limits; `None` when none is
 /// known.
 #[must_use]
-pub fn available_to_process() -> Option<u64> {
+pub(crate) fn available_to_process() -> Option<u64> {
     [meminfo_available(), cgroup_room(), rlimit()]
         .into_iter()
         .flatten()
@@ -267,7 +267,7 @@ pub fn parse_size(s: &str) -> std::result::Result<u64, String> {
 
 /// A size in bytes for messages: MiB with one decimal from 1 MiB up, else bytes.
 #[must_use]
-pub fn readable_bytes(bytes: u64) -> String {
+pub(crate) fn readable_bytes(bytes: u64) -> String {
     if bytes >= 1 << 30 {
         format!("{:.1} GiB", bytes as f64 / f64::from(1u32 << 30))
     } else if bytes >= 1 << 20 {

@@ -237,8 +237,8 @@ mod tests {
         ),
         ("view/passes.rs", include_str!("view/passes.rs")),
         (
-            "examples/zbuffer_bounds.rs",
-            include_str!("../examples/zbuffer_bounds.rs"),
+            "benches/zbuffer_bounds.rs",
+            include_str!("../benches/zbuffer_bounds.rs"),
         ),
     ];
 

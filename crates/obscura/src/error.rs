@@ -64,6 +64,20 @@ pub enum Error {
         /// The file.
         path: PathBuf,
     },
+    /// The file's format is one obscura reads, but this build leaves its cargo feature
+    /// out (`obj`, `gltf`, `stl`, `ply`, `toml-scene`; all on by default).
+    #[error(
+        "{}: reading {format} files needs obscura's cargo feature \"{feature}\", which this build leaves out",
+        path.display()
+    )]
+    FormatDisabled {
+        /// The file.
+        path: PathBuf,
+        /// The format, as a user names it (`OBJ`, `glTF`, ...).
+        format: &'static str,
+        /// The cargo feature that reads it.
+        feature: &'static str,
+    },
     /// An object of the scene is unusable (non-finite coordinates, bad transform...).
     #[error("object \"{object}\": {message}")]
     InvalidObject {

@@ -1,8 +1,17 @@
 //! # obscura: what can be seen?
 //!
-//! Given a 3D scene and a view, obscura clips, culls and removes hidden surfaces with
-//! every classical algorithm of the field behind one interface, each checked against
-//! the others.
+//! Given a 3D scene and a view, obscura clips, culls back faces and objects outside
+//! the view, and removes hidden surfaces with the classical algorithms of the field
+//! behind one interface, each checked against the others. Hidden lines and occlusion
+//! culling are not there yet.
+//!
+//! A scene comes from a file ([`Scene::load`]: OBJ, glTF, STL, PLY or a TOML scene
+//! file, each behind a default cargo feature of its name), from arrays in memory
+//! ([`Scene::from_arrays`]) or from a built-in demo ([`Scene::demo`]); a camera from
+//! look-at parameters ([`Camera::perspective`], [`Camera::orthographic`]), from a view
+//! and a projection matrix ([`Camera::from_matrices`]) or from pinhole intrinsics
+//! ([`Camera::from_intrinsics`]). `examples/` shows a whole run: load, set a camera,
+//! render, read ids and depth, write PNG and NPY.
 //!
 //! ```text
 //! Scene ─► view::prepare ─► PreparedView ─► surface::render(Algorithm) ─► Frame (ids + depth)
@@ -12,7 +21,7 @@
 //! use obscura::{Scene, Viewport, prepare, PrepareOptions};
 //! use obscura::surface::{render, Algorithm, RenderOptions};
 //!
-//! let scene = Scene::load("demo:default")?;
+//! let scene = Scene::demo("default")?;
 //! let viewport = Viewport::new(320, 240)?;
 //! let camera = scene.default_camera(viewport.aspect());
 //! let view = prepare(&scene, &camera, viewport, &PrepareOptions::default())?;
@@ -33,13 +42,15 @@
 pub mod accel;
 pub mod budget;
 pub mod clip;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod cpu;
 pub mod cull;
 mod error;
 pub mod frame;
 pub mod geom;
 pub mod index;
-pub mod memory;
+mod memory;
 pub mod raster;
 #[doc(hidden)]
 pub mod rng;

@@ -2,15 +2,19 @@
 //! refused before it is allocated, or stopped while it grows, with an error naming it.
 //! Every input is generated here.
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 use std::path::PathBuf;
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 use obscura::scene::load::LoadOptions;
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 use obscura::scene::load::toml_scene::{MAX_PLACED_FACES, PLACED_FACE_BYTES, PLACED_VERTEX_BYTES};
 use obscura::scene::random::random_triangles;
 use obscura::scene::{Scene, Viewport, demo};
 use obscura::surface::{Algorithm, RenderOptions, render};
 use obscura::{Error, PrepareOptions, prepare};
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 fn tempdir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("obscura-budget-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
@@ -158,6 +162,7 @@ fn a_prepared_view_over_the_budget_is_refused() {
     assert!(bytes >= 2000 * 3 * 32, "{bytes}");
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 /// An OBJ of a flat grid of `n x n` quads as `2 n^2` triangles; returns (faces,
 /// vertices).
 fn write_grid_obj(path: &PathBuf, n: usize) -> (u64, u64) {
@@ -178,6 +183,7 @@ fn write_grid_obj(path: &PathBuf, n: usize) -> (u64, u64) {
     (2 * (n * n) as u64, ((n + 1) * (n + 1)) as u64)
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 /// A scene file placing `mesh` `count` times, one table of 3 lines each after a
 /// 1-line header comment: table `k` (0-based) starts on line `2 + 3 k`.
 fn write_placements(path: &PathBuf, mesh: &str, count: usize) {
@@ -188,6 +194,7 @@ fn write_placements(path: &PathBuf, mesh: &str, count: usize) {
     std::fs::write(path, s).unwrap();
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 #[test]
 fn scene_file_placements_over_the_face_cap_are_refused_at_their_line() {
     let dir = tempdir("toml-cap");
@@ -219,6 +226,7 @@ fn scene_file_placements_over_the_face_cap_are_refused_at_their_line() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 #[test]
 fn scene_file_placements_over_the_budget_are_refused_naming_the_file_and_line() {
     let dir = tempdir("toml-budget");

@@ -5,6 +5,14 @@
 //! that the load ends (the test returning is that check) with a clean error naming the
 //! file, or with a scene whose default camera is valid and which renders. No timing is
 //! asserted.
+// Files the fuzzers wrote: built with every file format (the default features).
+#![cfg(all(
+    feature = "obj",
+    feature = "gltf",
+    feature = "stl",
+    feature = "ply",
+    feature = "toml-scene"
+))]
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -1,6 +1,14 @@
 //! Every scene loader on small files written here: counts, face id order, colours,
 //! transforms, binary and ASCII variants, and each kind of bad input with the file and
 //! line (or element) its error must name.
+// The loaders: built with every file format (the default features).
+#![cfg(all(
+    feature = "obj",
+    feature = "gltf",
+    feature = "stl",
+    feature = "ply",
+    feature = "toml-scene"
+))]
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

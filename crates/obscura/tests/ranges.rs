@@ -5,7 +5,9 @@
 //! camera; what lies outside the documented range is refused with a message naming
 //! the object, or the file, line and entry.
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 use std::path::{Path, PathBuf};
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::{DMat4, DVec3};
@@ -13,9 +15,11 @@ use obscura::scene::{MIN_EXTENT, ObjectDesc, demo};
 use obscura::surface::{Algorithm, RenderOptions, render};
 use obscura::{BACKGROUND, Camera, Frame, PrepareOptions, Scene, Viewport, prepare};
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 /// A fresh directory under the system temp dir, removed when dropped.
 struct TempDir(PathBuf);
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 impl TempDir {
     fn new(tag: &str) -> Self {
         static NEXT: AtomicUsize = AtomicUsize::new(0);
@@ -35,6 +39,7 @@ impl TempDir {
     }
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 impl Drop for TempDir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
@@ -210,10 +215,12 @@ fn a_huge_or_tiny_up_vector_gives_a_finite_camera() {
     }
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 fn load_err(path: &Path) -> String {
     Scene::load(path.to_str().unwrap()).unwrap_err().to_string()
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 #[test]
 fn toml_scales_out_of_range_name_the_scale_and_its_line() {
     let t = TempDir::new("scale");
@@ -256,6 +263,7 @@ fn toml_scales_out_of_range_name_the_scale_and_its_line() {
     Scene::load(p.to_str().unwrap()).unwrap();
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 #[test]
 fn a_bad_matrix_entry_is_named_with_its_line() {
     let t = TempDir::new("matrix");
@@ -289,6 +297,7 @@ fn a_bad_matrix_entry_is_named_with_its_line() {
     }
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 #[test]
 fn toml_up_vectors_of_any_length_are_directions_and_zero_is_named() {
     let t = TempDir::new("up");
@@ -315,6 +324,7 @@ fn toml_up_vectors_of_any_length_are_directions_and_zero_is_named() {
     assert!(e.contains("z.toml:8:") && e.contains("up"), "{e}");
 }
 
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
 #[test]
 fn a_bow_tie_quad_is_reported_as_self_intersecting() {
     let t = TempDir::new("bowtie");

@@ -308,7 +308,7 @@ fn windows_see_only_faces_not_disjoint_from_them() {
 #[test]
 fn same_frames_with_the_inclusive_fill_rule() {
     // The seed-task scene with the inclusive rule (shared edges covered twice).
-    let scene = obscura::Scene::load("demo:seed-task").unwrap();
+    let scene = obscura::Scene::demo("seed-task").unwrap();
     let vp = obscura::Viewport::new(32, 32).unwrap();
     let view = prepare(
         &scene,

@@ -158,7 +158,7 @@ impl SceneTriangles {
 
     /// The triangles of each object.
     #[must_use]
-    pub fn object_triangles(&self) -> &[Range<u32>] {
+    pub(crate) fn object_triangles(&self) -> &[Range<u32>] {
         &self.object_triangles
     }
 
@@ -269,21 +269,21 @@ impl PrimaryRays {
     /// caller can compute it once per column.
     #[inline]
     #[must_use]
-    pub fn window_x(&self, px: f64) -> f64 {
+    pub(crate) fn window_x(&self, px: f64) -> f64 {
         self.rays.window_x(px)
     }
 
     /// The window coordinate of image row `py` (`sy` of [`Camera::ray`]).
     #[inline]
     #[must_use]
-    pub fn window_y(&self, py: f64) -> f64 {
+    pub(crate) fn window_y(&self, py: f64) -> f64 {
         self.rays.window_y(py)
     }
 
     /// The ray through window point `(sx, sy)` (see [`PrimaryRays::window_x`]).
     #[inline]
     #[must_use]
-    pub fn ray_at(&self, sx: f64, sy: f64) -> (DVec3, DVec3) {
+    pub(crate) fn ray_at(&self, sx: f64, sy: f64) -> (DVec3, DVec3) {
         self.rays.ray_at(sx, sy)
     }
 
@@ -292,7 +292,7 @@ impl PrimaryRays {
     /// window on the eye plane, the eye's plus the window's half extents (`right` and
     /// `up` are unit vectors).
     #[must_use]
-    pub fn origin_magnitude(&self) -> f64 {
+    pub(crate) fn origin_magnitude(&self) -> f64 {
         let r = &self.rays;
         let eye = r.eye.abs().max_element();
         if r.orthographic {
@@ -334,7 +334,7 @@ impl TieRule {
     /// `r` counts as inside it.
     #[cold]
     #[must_use]
-    pub fn accepts_edge(&self, p: DVec3, q: DVec3, r: DVec3) -> bool {
+    pub(crate) fn accepts_edge(&self, p: DVec3, q: DVec3, r: DVec3) -> bool {
         let (m, side) = if self.orthographic {
             let m = (q - p).cross(self.forward);
             (m, m.dot(r - p))
@@ -412,7 +412,7 @@ pub trait WithAxisOrder {
 /// Runs `f` with the axis order of index `order` (see [`WatertightRay::order_index`];
 /// 5 and above mean the last order).
 #[inline]
-pub fn dispatch_order<F: WithAxisOrder>(order: u8, f: F) -> F::Output {
+pub(crate) fn dispatch_order<F: WithAxisOrder>(order: u8, f: F) -> F::Output {
     match order {
         0 => f.run::<OrderYzx>(),
         1 => f.run::<OrderZyx>(),
@@ -488,7 +488,7 @@ impl WatertightRay {
     /// order (what [`WatertightRay::intersect`] computes with).
     #[inline]
     #[must_use]
-    pub fn shear(&self) -> DVec3 {
+    pub(crate) fn shear(&self) -> DVec3 {
         self.shear
     }
 
@@ -607,7 +607,7 @@ impl ClosestHit {
 
     /// Takes the hit if it is nearer, or as near with a lower face id.
     #[inline]
-    pub fn offer(&mut self, t: f64, face: u32) {
+    pub(crate) fn offer(&mut self, t: f64, face: u32) {
         if t < self.t || (t == self.t && face < self.face) {
             self.t = t;
             self.face = face;
@@ -658,7 +658,7 @@ impl HitContext<'_> {
     /// The nearest hit among all of `triangles` up to `t_max` (brute force), adding the
     /// exact tests made to `tests`.
     #[inline(always)]
-    pub fn closest_of_all<O: AxisOrder>(
+    pub(crate) fn closest_of_all<O: AxisOrder>(
         &self,
         triangles: &SceneTriangles,
         t_max: f64,

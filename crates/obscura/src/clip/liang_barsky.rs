@@ -87,7 +87,7 @@ pub fn rect_pq(p1: DVec2, p2: DVec2, rect: &Rect) -> [(f64, f64); 4] {
 
 /// The parameter interval of segment `p1 p2` inside the rectangle, or `None`.
 #[must_use]
-pub fn rect_parameters(p1: DVec2, p2: DVec2, rect: &Rect) -> Option<(f64, f64)> {
+pub(crate) fn rect_parameters(p1: DVec2, p2: DVec2, rect: &Rect) -> Option<(f64, f64)> {
     if !(p1.in_range() && p2.in_range()) {
         return None;
     }

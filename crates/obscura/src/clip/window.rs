@@ -288,7 +288,7 @@ impl ConvexWindow {
     /// edge line's `a x + b y + c` computed relative to the edge's first vertex.
     #[inline]
     #[must_use]
-    pub fn edge_value(&self, i: usize, p: DVec2) -> f64 {
+    pub(crate) fn edge_value(&self, i: usize, p: DVec2) -> f64 {
         self.dirs[i].perp_dot(p - self.vertices[i])
     }
 

@@ -54,7 +54,7 @@ impl KdopKind {
 
     /// Indices into [`KDOP_AXES`] of the directions used.
     #[must_use]
-    pub fn axis_indices(self) -> &'static [usize] {
+    pub(crate) fn axis_indices(self) -> &'static [usize] {
         match self {
             KdopKind::K14 => &[0, 1, 2, 3, 4, 5, 6],
             KdopKind::K18 => &[0, 1, 2, 7, 8, 9, 10, 11, 12],
@@ -143,7 +143,7 @@ impl Kdop {
 impl Kdop {
     /// [`Kdop::ray_interval`] with the ray's projections computed beforehand.
     #[must_use]
-    pub fn ray_interval_projected(&self, ray: &RaySlabs) -> Option<(f64, f64)> {
+    pub(crate) fn ray_interval_projected(&self, ray: &RaySlabs) -> Option<(f64, f64)> {
         let mut t0 = f64::NEG_INFINITY;
         let mut t1 = f64::INFINITY;
         for &i in self.kind.axis_indices() {

@@ -83,7 +83,7 @@ impl std::str::FromStr for BoundsKind {
 /// 1e-154) where `v.length()` would. Zero for a zero vector, not finite for a
 /// non-finite one.
 #[must_use]
-pub fn robust_length(v: DVec3) -> f64 {
+pub(crate) fn robust_length(v: DVec3) -> f64 {
     let m = v.abs().max_element();
     if m > 0.0 && m.is_finite() {
         m * (v / m).length()
@@ -96,7 +96,7 @@ pub fn robust_length(v: DVec3) -> f64 {
 /// scaled by its largest component before it is normalized); `None` for a zero or
 /// non-finite vector.
 #[must_use]
-pub fn unit_direction(v: DVec3) -> Option<DVec3> {
+pub(crate) fn unit_direction(v: DVec3) -> Option<DVec3> {
     let m = v.abs().max_element();
     if !(m > 0.0 && m.is_finite()) {
         return None;

@@ -17,14 +17,12 @@
 //!   written, so the resident size may grow by up to 2 MiB per buffer.
 //! - Source: Linux `madvise(2)` and Documentation/admin-guide/mm/transhuge.rst.
 //!
-//! A program can go further and install [`HugePageAllocator`] as its global allocator:
-//! every large block then lies in whole huge pages, its ends included, and freed large
-//! blocks are kept and reused, so later buffers cost no page fault at all.
+//! A program can go further and install a global allocator that maps large blocks in
+//! whole huge pages, ends included, and keeps freed ones for reuse, so later buffers
+//! cost no page fault at all: the `obscura` command line does (its `allocator.rs`).
+//! Choosing a global allocator is a program's decision, so the library offers none.
 
 use std::collections::TryReserveError;
-
-mod allocator;
-pub use allocator::{HugePageAllocator, KEPT_BLOCKS, KEPT_BYTES, LARGE};
 
 /// The size of a transparent huge page on x86-64 and most 64-bit Linux systems.
 pub(crate) const HUGE_PAGE: usize = 2 << 20;
@@ -119,13 +117,13 @@ mod tests {
     use super::*;
 
     /// Whether this system backs advised ranges with huge pages.
-    pub(super) fn huge_pages_enabled() -> bool {
+    fn huge_pages_enabled() -> bool {
         std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled")
             .is_ok_and(|s| s.contains("[madvise]") || s.contains("[always]"))
     }
 
     /// `AnonHugePages` of the mapping holding `addr`, in KiB, from `/proc/self/smaps`.
-    pub(super) fn anon_huge_kib(addr: usize) -> Option<u64> {
+    fn anon_huge_kib(addr: usize) -> Option<u64> {
         let text = std::fs::read_to_string("/proc/self/smaps").ok()?;
         let mut inside = false;
         for line in text.lines() {

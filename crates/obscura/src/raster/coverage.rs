@@ -102,7 +102,7 @@ impl EdgeFunction {
     /// The part of the raw value that depends on the row: `dx * (py - oy)`.
     #[inline(always)]
     #[must_use]
-    pub fn row_term(&self, py: f64) -> f64 {
+    pub(crate) fn row_term(&self, py: f64) -> f64 {
         self.dx * (py - self.oy)
     }
 

@@ -173,14 +173,14 @@ pub trait Lanes: Copy {
 /// The mask of the lanes `0..n` (all for `n >= 8`).
 #[inline(always)]
 #[must_use]
-pub fn lanes_below(n: usize) -> u8 {
+pub(crate) fn lanes_below(n: usize) -> u8 {
     if n >= 8 { 0xff } else { (1u8 << n) - 1 }
 }
 
 /// The mask of the lanes `0..n` of sixteen (all for `n >= 16`).
 #[inline(always)]
 #[must_use]
-pub fn lanes_below16(n: usize) -> u16 {
+pub(crate) fn lanes_below16(n: usize) -> u16 {
     if n >= 16 { 0xffff } else { (1u16 << n) - 1 }
 }
 

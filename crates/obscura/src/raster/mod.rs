@@ -11,10 +11,16 @@
 //! thesis, University of Utah, 1974): the depth buffer the block rasterizer fills.
 
 #[cfg(target_arch = "x86_64")]
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod avx512;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod block;
 mod coverage;
 mod depth_plane;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod lanes;
 mod rounding;
 mod setup;

@@ -1,4 +1,5 @@
-//! Built-in demo scenes (`demo:NAME`) and the mesh generators they are made of.
+//! Built-in demo scenes ([`Scene::demo`], the CLI's `demo:NAME`) and the mesh generators
+//! they are made of.
 //!
 //! | name | what | size |
 //! | --- | --- | --- |
@@ -24,7 +25,7 @@ use crate::{Error, Result};
 #[doc(hidden)]
 pub use crate::rng::SplitMix64;
 
-/// The names `demo:NAME` accepts.
+/// The names [`Scene::demo`] (and the CLI's `demo:NAME`) accepts.
 pub const NAMES: [&str; 6] = [
     "default",
     "seed-task",

@@ -8,10 +8,14 @@
 //! degenerate face keeps its id too (it just never appears in an image).
 
 mod adjacency;
+mod arrays;
 mod camera;
+mod camera_matrices;
 pub mod demo;
 pub mod load;
 mod mesh;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod random;
 
 use std::path::{Path, PathBuf};
@@ -20,8 +24,10 @@ use std::sync::Arc;
 use glam::{DMat4, DVec3};
 
 pub use adjacency::{EdgeAdjacency, MeshEdge, is_convex_closed};
+pub use arrays::Faces;
 pub(crate) use camera::ImageRays;
 pub use camera::{Camera, Projection, Ray, Viewport};
+pub use camera_matrices::Intrinsics;
 
 /// The largest magnitude of a world coordinate (and of a camera's position and planes)
 /// that obscura accepts. Its single-precision structures (the `f32` depth keys, the
@@ -208,22 +214,34 @@ impl Scene {
         Self::default()
     }
 
-    /// Loads a scene from a spec: `demo:NAME` for a built-in scene, else a file path
-    /// (`.obj`, `.gltf`, `.glb`, `.stl`, `.ply`, or a `.toml` scene file).
-    pub fn load(spec: &str) -> Result<Scene> {
-        if let Some(name) = spec.strip_prefix("demo:") {
-            return demo::scene(name);
-        }
-        load::load_file(Path::new(spec))
+    /// Loads a scene from a file: a mesh (`.obj`, `.gltf`, `.glb`, `.stl`, `.ply`) or a
+    /// `.toml` scene file, with the default [`load::LoadOptions`]. Built-in scenes come
+    /// from [`Scene::demo`] (the CLI's `demo:NAME` maps to it); meshes already in
+    /// memory from [`Scene::from_arrays`].
+    ///
+    /// A format whose cargo feature is disabled (`obj`, `gltf`, `stl`, `ply`,
+    /// `toml-scene`, all on by default) is refused with an error naming the feature.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene> {
+        load::load_file(path.as_ref())
     }
 
     /// [`Scene::load`] with options: what the scene may read and how much it may
     /// build (see [`load::LoadOptions`]).
-    pub fn load_with(spec: &str, options: &load::LoadOptions) -> Result<Scene> {
-        if let Some(name) = spec.strip_prefix("demo:") {
-            return demo::scene(name);
-        }
-        load::load_file_with(Path::new(spec), options)
+    pub fn load_with(path: impl AsRef<Path>, options: &load::LoadOptions) -> Result<Scene> {
+        load::load_file_with(path.as_ref(), options)
+    }
+
+    /// A built-in demo scene by name (`default`, `seed-task`, `cube`, `sphere`, `city`,
+    /// `triangles`; see [`demo`]); an unknown name is [`Error::UnknownDemo`], which
+    /// lists the known ones.
+    ///
+    /// ```
+    /// let scene = obscura::Scene::demo("cube")?;
+    /// assert_eq!(scene.face_count(), 6);
+    /// # Ok::<(), obscura::Error>(())
+    /// ```
+    pub fn demo(name: &str) -> Result<Scene> {
+        demo::scene(name)
     }
 
     /// The files loading read (the scene file, mesh files, material libraries, glTF

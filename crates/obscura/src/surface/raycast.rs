@@ -185,7 +185,7 @@ pub fn render_indexed(
 }
 
 /// Brute force: every ray against every triangle (seed 000's `RayCasting`).
-pub fn render_brute_force(
+pub(crate) fn render_brute_force(
     view: &View<'_>,
     triangles: &SceneTriangles,
     options: &RenderOptions,
@@ -278,7 +278,7 @@ impl ObjectBound {
 /// object's volume cannot hit the object. The objects whose volume it meets are tested
 /// nearest volume first, and the search stops at a volume that starts behind the
 /// nearest hit found.
-pub fn render_bounds(
+pub(crate) fn render_bounds(
     view: &View<'_>,
     triangles: &SceneTriangles,
     kind: BoundsKind,

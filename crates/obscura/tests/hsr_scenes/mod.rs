@@ -300,7 +300,7 @@ pub fn orthographic(seed: u64) -> Case {
 
 /// The default demo at a small size.
 pub fn demo_default(w: u64, h: u64) -> Case {
-    let scene = Scene::load("demo:default").unwrap();
+    let scene = Scene::demo("default").unwrap();
     let vp = Viewport::new(w, h).unwrap();
     let cam = scene.default_camera(vp.aspect());
     Case::new("demo:default", scene, cam, w, h)

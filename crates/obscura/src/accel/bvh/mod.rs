@@ -36,9 +36,13 @@
 //!   triangles.
 
 mod build;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod packet;
 mod packet_lanes;
 mod ray_packet;
+// Internal: public only for the crate's own tests and benches (not API).
+#[doc(hidden)]
 pub mod traverse;
 
 use std::time::Instant;
@@ -133,7 +137,7 @@ impl BvhNode {
     /// while the ray's numbers are finite in `f32`.
     #[inline(always)]
     #[must_use]
-    pub fn occupied(&self) -> u32 {
+    pub(crate) fn occupied(&self) -> u32 {
         (0..WIDTH).fold(0, |c, k| {
             c | u32::from(self.child[k] != EMPTY_CHILD || self.count[k] != 0) << k
         })

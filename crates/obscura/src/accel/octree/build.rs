@@ -207,7 +207,7 @@ impl TriangleSoup {
     /// Meaningful off the surfaces; O(triangles of the closed objects whose box
     /// contains `p`).
     #[must_use]
-    pub fn is_inside(&self, p: DVec3) -> bool {
+    pub(crate) fn is_inside(&self, p: DVec3) -> bool {
         self.objects.iter().any(|o| {
             o.closed
                 && o.bounds.contains(p)

@@ -98,7 +98,7 @@ pub const MAX_DEPTH: u32 = 10;
 pub const FROM_FN_MAX_DEPTH: u32 = 8;
 
 /// "No node": the parent of the root, the first child of a leaf.
-pub const NONE: u32 = u32::MAX;
+pub(crate) const NONE: u32 = u32::MAX;
 
 /// No face: the face of nodes that are not partial.
 pub const NO_FACE: u32 = u32::MAX;
@@ -183,7 +183,7 @@ impl Node {
 
     /// Whether the node has no children.
     #[must_use]
-    pub fn is_leaf(&self) -> bool {
+    pub(crate) fn is_leaf(&self) -> bool {
         self.kind != NodeKind::Internal
     }
 
@@ -267,7 +267,7 @@ impl Cell {
 
     /// Whether the cell touches the region's boundary.
     #[must_use]
-    pub fn touches_boundary(self) -> bool {
+    pub(crate) fn touches_boundary(self) -> bool {
         let last = (1u32 << self.level) - 1;
         [self.x, self.y, self.z]
             .iter()
@@ -516,7 +516,7 @@ impl Octree {
 
     /// How the tree was built (zero for trees not made by voxelization).
     #[must_use]
-    pub fn build_stats(&self) -> &BuildStats {
+    pub(crate) fn build_stats(&self) -> &BuildStats {
         &self.build_stats
     }
 
@@ -565,7 +565,7 @@ impl Octree {
     /// The leaf containing the voxel `(x, y, z)` (finest-level coordinates), `None`
     /// outside the grid.
     #[must_use]
-    pub fn leaf_at(&self, x: u32, y: u32, z: u32) -> Option<u32> {
+    pub(crate) fn leaf_at(&self, x: u32, y: u32, z: u32) -> Option<u32> {
         let n = 1u32 << self.depth;
         if x >= n || y >= n || z >= n {
             return None;

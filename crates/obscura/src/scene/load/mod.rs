@@ -9,6 +9,11 @@
 //! | `.ply` | PLY, ASCII or binary (either byte order) | [`ply`] |
 //! | `.toml` | an obscura scene file placing meshes (`docs/scene-files.md`) | [`toml_scene`] |
 //!
+//! Each format is behind a cargo feature of the same name (`obj`, which also reads MTL,
+//! `gltf`, `stl`, `ply`, `toml-scene`), all on by default, so that an engine can depend
+//! on the core alone (`default-features = false`). A file whose format is left out is
+//! refused with [`Error::FormatDisabled`], which names the feature.
+//!
 //! Input: a path. Output: a [`Loaded`] (objects in file order, a [`LoadReport`], the
 //! file's up axis when the format has one) or, through [`load_file`], a [`Scene`].
 //!
@@ -48,12 +53,31 @@
 //! 4N items and printing the ratio of the times. Files are read whole into memory.
 //! (Triangulating one concave n-gon is the exception, bounded as `MeshBuilder` says.)
 
+// The helpers below serve the loaders; a build that leaves every format out (or some)
+// does not call them all.
+#![cfg_attr(
+    not(all(
+        feature = "obj",
+        feature = "gltf",
+        feature = "stl",
+        feature = "ply",
+        feature = "toml-scene"
+    )),
+    allow(dead_code)
+)]
+
+#[cfg(feature = "gltf")]
 pub mod gltf;
+#[cfg(feature = "obj")]
 pub mod mtl;
+#[cfg(feature = "obj")]
 pub mod obj;
+#[cfg(feature = "ply")]
 pub mod ply;
 pub(crate) mod reference;
+#[cfg(feature = "stl")]
 pub mod stl;
+#[cfg(feature = "toml-scene")]
 pub mod toml_scene;
 
 use std::path::Path;
@@ -139,11 +163,42 @@ pub(crate) fn load_objects_in(path: &Path, sources: &mut Sources<'_>) -> Result<
         return Ok(Loaded::default());
     }
     match ext.as_str() {
+        #[cfg(feature = "obj")]
         "obj" => obj::load_in(path, &bytes, sources),
+        #[cfg(feature = "gltf")]
         "gltf" | "glb" => gltf::load_in(path, &bytes, sources),
+        #[cfg(feature = "stl")]
         "stl" => stl::load(path, bytes),
+        #[cfg(feature = "ply")]
         "ply" => ply::load(path, &bytes),
-        _ => unreachable!("filtered by MESH_EXTENSIONS"),
+        _ => {
+            let _ = bytes;
+            Err(format_disabled(path, &ext))
+        }
+    }
+}
+
+/// The format and cargo feature of each extension obscura reads.
+const FORMAT_FEATURES: [(&str, &str, &str); 6] = [
+    ("obj", "OBJ", "obj"),
+    ("gltf", "glTF", "gltf"),
+    ("glb", "glTF", "gltf"),
+    ("stl", "STL", "stl"),
+    ("ply", "PLY", "ply"),
+    ("toml", "scene (.toml)", "toml-scene"),
+];
+
+/// [`Error::FormatDisabled`] for a file of a known extension whose feature this build
+/// leaves out (with every feature on, never reached).
+fn format_disabled(path: &Path, ext: &str) -> Error {
+    let (format, feature) = FORMAT_FEATURES
+        .iter()
+        .find(|(e, _, _)| *e == ext)
+        .map_or(("this", "?"), |&(_, format, feature)| (format, feature));
+    Error::FormatDisabled {
+        path: path.to_path_buf(),
+        format,
+        feature,
     }
 }
 
@@ -158,7 +213,14 @@ pub fn load_file(path: &Path) -> Result<Scene> {
 pub fn load_file_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let mut sources = Sources::new(options);
     let mut scene = if extension(path).as_deref() == Some("toml") {
-        toml_scene::load_in(path, &mut sources)?
+        #[cfg(feature = "toml-scene")]
+        {
+            toml_scene::load_in(path, &mut sources)?
+        }
+        #[cfg(not(feature = "toml-scene"))]
+        {
+            return Err(format_disabled(path, "toml"));
+        }
     } else {
         let loaded = load_objects_in(path, &mut sources)?;
         scene_from(loaded, &path.display().to_string())?

@@ -1,7 +1,7 @@
 //! How far the scanline's time on a scene is from the bare bones of its per-row work.
 //!
 //! ```text
-//! cargo run --release -p obscura --example scanline_bounds [-- SCENE [RUNS]]
+//! cargo bench -p obscura --bench scanline_bounds [-- SCENE [RUNS]]
 //! ```
 //!
 //! SCENE defaults to `../shared/data/sponza.obj` seen from the atrium camera of that

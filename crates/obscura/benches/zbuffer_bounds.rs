@@ -1,7 +1,7 @@
 //! How far the z-buffer's time on a scene is from what its visible work costs.
 //!
 //! ```text
-//! cargo run --release -p obscura --example zbuffer_bounds [-- SCENE [RUNS]]
+//! cargo bench -p obscura --bench zbuffer_bounds [-- SCENE [RUNS]]
 //! ```
 //!
 //! SCENE defaults to `../shared/data/sponza.obj` seen from the atrium camera of that

@@ -1,7 +1,7 @@
 //! A global allocator that gives large blocks whole transparent huge pages.
 //!
-//! [`super::vec_with_capacity`] advises the kernel to back a buffer with huge pages,
-//! but only the buffer's 2 MiB-aligned interior can have them: the system allocator
+//! The library advises the kernel to back its large buffers with huge pages
+//! (`madvise`, in the library's `memory` module), but only the buffer's 2 MiB-aligned interior can have them: the system allocator
 //! places a large block 16 bytes past a 4 KiB page boundary, so up to 2 MiB at each end
 //! stays in small pages. For a 1080p frame that is about 1,000 page faults (1.5 ms on
 //! the virtual machines this crate is measured on), and every large buffer of a
@@ -31,16 +31,17 @@
 //!   the kernel
 //!   falls back to small pages silently when it has no free huge page or transparent
 //!   huge pages are off (`never`).
-//! - Use: install it in a program with
-//!   `#[global_allocator] static ALLOC: obscura::memory::HugePageAllocator = obscura::memory::HugePageAllocator::new();`
-//!   (the `obscura` command line does). The library works the same without it.
+//! - Use: the `obscura` command line installs it (`main.rs`); it lives here, not in
+//!   the library, because choosing a global allocator is a program's decision. The
+//!   library works the same without it.
 //! - Source: Linux `mmap(2)`, `mremap(2)`, `madvise(2)` and
 //!   Documentation/admin-guide/mm/transhuge.rst.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::{Mutex, PoisonError};
 
-use super::HUGE_PAGE;
+/// The size of a transparent huge page on x86-64 and most 64-bit Linux systems.
+const HUGE_PAGE: usize = 2 << 20;
 
 /// Blocks of at least this many bytes are mapped in huge pages: from 1 MiB, one huge
 /// page (a 2 MiB clear) costs less than the 256 small-page faults it replaces.
@@ -51,7 +52,7 @@ pub const LARGE: usize = 1 << 20;
 ///
 /// ```
 /// use std::alloc::{GlobalAlloc, Layout};
-/// use obscura::memory::HugePageAllocator;
+/// use crate::allocator::HugePageAllocator;
 ///
 /// let a = HugePageAllocator::new();
 /// let layout = Layout::array::<u32>(4 << 20).unwrap(); // 16 MiB
@@ -136,6 +137,7 @@ impl HugePageAllocator {
     }
 
     /// Bytes held in freed blocks kept for reuse.
+    #[cfg(test)]
     #[must_use]
     pub fn kept_bytes(&self) -> usize {
         self.lock().bytes()
@@ -398,6 +400,32 @@ unsafe fn remap(_ptr: *mut u8, _old: usize, _new: usize) -> *mut u8 {
 mod tests {
     use super::*;
 
+    /// Whether this system backs advised ranges with huge pages (as the library's
+    /// `memory` tests ask).
+    fn huge_pages_enabled() -> bool {
+        std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled")
+            .is_ok_and(|s| s.contains("[madvise]") || s.contains("[always]"))
+    }
+
+    /// `AnonHugePages` of the mapping holding `addr`, in KiB, from `/proc/self/smaps`.
+    fn anon_huge_kib(addr: usize) -> Option<u64> {
+        let text = std::fs::read_to_string("/proc/self/smaps").ok()?;
+        let mut inside = false;
+        for line in text.lines() {
+            let first = line.split_whitespace().next().unwrap_or("");
+            if let Some((a, b)) = first.split_once('-')
+                && let (Ok(a), Ok(b)) = (usize::from_str_radix(a, 16), usize::from_str_radix(b, 16))
+            {
+                inside = a <= addr && addr < b;
+                continue;
+            }
+            if inside && let Some(rest) = line.strip_prefix("AnonHugePages:") {
+                return rest.trim().trim_end_matches("kB").trim().parse().ok();
+            }
+        }
+        None
+    }
+
     /// A pattern value for byte `i`.
     fn pattern(i: usize) -> u8 {
         (i.wrapping_mul(2_654_435_761) >> 7) as u8
@@ -498,7 +526,7 @@ mod tests {
 
     #[test]
     fn large_blocks_lie_in_huge_pages_from_end_to_end() {
-        if !super::super::tests::huge_pages_enabled() {
+        if !huge_pages_enabled() {
             eprintln!(
                 "SKIPPED large_blocks_lie_in_huge_pages_from_end_to_end: transparent huge \
                  pages are off on this system"
@@ -512,7 +540,7 @@ mod tests {
         unsafe {
             let p = a.alloc_zeroed(layout);
             std::slice::from_raw_parts_mut(p, size).fill(1);
-            let kib = super::super::tests::anon_huge_kib(p as usize).unwrap_or(0);
+            let kib = anon_huge_kib(p as usize).unwrap_or(0);
             a.dealloc(p, layout);
             // The kernel may lack free huge pages; it usually has them.
             if kib == 0 {

@@ -1,4 +1,5 @@
-//! What the measuring examples share: the scene and view they measure, from their
+//! What the measuring programs (`zbuffer_bounds`, `scanline_bounds`: benches without a
+//! harness) share: the scene and view they measure, from their
 //! command line `[SCENE [RUNS]]`.
 
 use glam::DVec3;
@@ -13,16 +14,24 @@ pub struct Measured {
     pub runs: usize,
 }
 
-/// SCENE (default `../shared/data/sponza.obj`, seen from the atrium camera of that
+/// SCENE (default `shared/data/sponza.obj` beside the checkout, as the other benches
+/// find it; a relative SCENE is taken from `crates/obscura`, where `cargo bench` runs; seen from the atrium camera of that
 /// folder's README; any other scene from its default camera) and RUNS (default
 /// `default_runs`) from the command line.
 pub fn from_args(default_runs: usize) -> Result<Measured, Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let path = args
-        .get(1)
-        .cloned()
-        .unwrap_or_else(|| "../shared/data/sponza.obj".into());
-    let runs: usize = args.get(2).map_or(Ok(default_runs), |s| s.parse())?;
+    // `cargo bench` passes `--bench` to a bench without a harness; it is not SCENE.
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
+    let path = args.first().cloned().unwrap_or_else(|| {
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/data/sponza.obj"
+        )
+        .into()
+    });
+    let runs: usize = args.get(1).map_or(Ok(default_runs), |s| s.parse())?;
     let scene = Scene::load(&path)?;
     let viewport = Viewport::new(1920, 1080)?;
     let camera = if path.ends_with("sponza.obj") {
