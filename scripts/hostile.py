@@ -94,6 +94,10 @@ def run(bin_, args, cwd, trace=False, timeout=TIMEOUT):
                ru.ru_maxrss / 1024, opened)
 
 
+# Cases ended by the time limit (reported, not findings).
+TIME_LIMITED = []
+
+
 def common_checks(cls, case, r, size_bytes=0, names=()):
     """The checks every run gets; returns True when the run was clean of them."""
     ok = True
@@ -111,7 +115,12 @@ def common_checks(cls, case, r, size_bytes=0, names=()):
         ok = False
     if r.rc not in (0, 101, -6, 134, -9):
         err = r.err.strip()
-        if names and not any(n in err for n in names):
+        # A run stopped or refused by the time limit names the work and --time-limit
+        # (and, for a file, the file): a named reason whatever the case expected.
+        timed = "--time-limit" in err
+        if timed:
+            TIME_LIMITED.append(case)
+        if names and not timed and not any(n in err for n in names):
             note(cls, "unnamed-error", case, err[:160])
             ok = False
         # (A control character quoted as `\u{12}` is an escape, not a debug structure.)
@@ -783,7 +792,8 @@ def main():
         else:
             print(f"kept {root}")
     print(f"\n{sum(counts.values())} runs in {time.monotonic() - t0:.0f} s; "
-          f"{len(findings)} findings")
+          f"{len(findings)} findings; {len(TIME_LIMITED)} ended by the time limit "
+          f"(named, not findings)")
     kinds = {}
     for f in findings:
         kinds[(f[0], f[1])] = kinds.get((f[0], f[1]), 0) + 1

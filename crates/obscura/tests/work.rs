@@ -3,37 +3,38 @@
 //! deadline or when the stop flag is raised, and the estimates count what they say.
 //! Every input is generated here.
 
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use glam::DVec3;
 use obscura::accel::bsp::{BspOptions, BspTraversal, BspTree};
-use obscura::scene::{Scene, Viewport, demo};
+use obscura::scene::{Faces, Scene, Viewport, demo};
 use obscura::surface::{self, Algorithm, RenderOptions, estimate, render};
 use obscura::{Camera, Error, PrepareOptions, prepare};
 
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("obscura-work-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// `k` squares of side 20 around the z axis, one behind the other, as an OBJ file.
-fn stacked_squares(name: &str, k: usize) -> Scene {
-    let mut text = String::new();
+/// `k` squares of side 20 around the z axis, one behind the other (from arrays, so
+/// that the test runs without the file formats' features).
+fn stacked_squares(k: usize) -> Scene {
+    let mut positions = Vec::new();
+    let (mut offsets, mut indices) = (vec![0u32], Vec::new());
     for i in 0..k {
         let z = -(i as f64) * 0.01;
-        for (x, y) in [(-10, -10), (10, -10), (10, 10), (-10, 10)] {
-            text += &format!("v {x} {y} {z}\n");
+        for (x, y) in [(-10.0, -10.0), (10.0, -10.0), (10.0, 10.0), (-10.0, 10.0)] {
+            positions.push([x, y, z]);
         }
-        let b = 4 * i + 1;
-        text += &format!("f {} {} {} {}\n", b, b + 1, b + 2, b + 3);
+        let b = 4 * i as u32;
+        indices.extend([b, b + 1, b + 2, b + 3]);
+        offsets.push(indices.len() as u32);
     }
-    let path = tempdir(name).join("squares.obj");
-    std::fs::write(&path, text).unwrap();
-    Scene::load(path.to_str().unwrap()).unwrap()
+    Scene::from_arrays(
+        &positions,
+        Faces::Polygons {
+            offsets: &offsets,
+            indices: &indices,
+        },
+    )
+    .unwrap()
 }
 
 /// Looking down -z at the squares: every one covers the whole image.
@@ -51,7 +52,7 @@ fn camera() -> Camera {
 #[test]
 fn painters_estimate_the_pixels_they_paint() {
     let k = 7;
-    let scene = stacked_squares("painters", k);
+    let scene = stacked_squares(k);
     let vp = Viewport::new(40, 30).unwrap();
     let view = prepare(&scene, &camera(), vp, &PrepareOptions::default()).unwrap();
     // Each square is clipped to the image: 40 x 30 pixels, k of them.
@@ -77,7 +78,7 @@ fn painters_estimate_the_pixels_they_paint() {
 #[test]
 fn ray_casters_estimate_their_ray_triangle_tests() {
     let k = 5;
-    let scene = stacked_squares("rays", k);
+    let scene = stacked_squares(k);
     let vp = Viewport::new(32, 24).unwrap();
     let view = prepare(&scene, &camera(), vp, &PrepareOptions::default()).unwrap();
     let options = RenderOptions::default();
@@ -109,7 +110,7 @@ fn ray_casters_estimate_their_ray_triangle_tests() {
 #[test]
 fn work_over_the_limit_is_refused_before_it_starts() {
     // 1000 x 1000 rays against 10,000 triangles: 1e10 tests, some 15 s.
-    let scene = stacked_squares("refused", 5000);
+    let scene = stacked_squares(5000);
     let vp = Viewport::new(1000, 1000).unwrap();
     let view = prepare(&scene, &camera(), vp, &PrepareOptions::default()).unwrap();
     let options = RenderOptions::default().with_time_limit(Some(Duration::from_secs(10)));
