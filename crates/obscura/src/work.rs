@@ -245,6 +245,12 @@ pub(crate) fn time_limit_message(
              image size",
             readable_seconds(e)
         ),
+        // A run's limit already spent when this work was to start (a `compare` whose
+        // earlier algorithms took the time).
+        None if limit_s < 1e-3 => format!(
+            "{work}: not started, no time left under the time limit; raise the limit with \
+             {option}, or reduce the input or the image size"
+        ),
         None => format!(
             "{work}: stopped at the time limit of {limit}; raise the limit with {option}, \
              or reduce the input or the image size"
