@@ -480,7 +480,7 @@ pub fn estimate(
             Some(Estimate::new(
                 name,
                 "pixels tested",
-                painted_pixels(view),
+                sampled_pixels(view, ZBUFFER_SAMPLE_STRIDE),
                 crate::work::NS_PER_ZBUFFER_PIXEL,
             ))
         }
@@ -539,25 +539,40 @@ pub fn estimate_view(
 /// The sum of the view polygons' areas in pixels (each clipped to the view volume, so
 /// none is larger than the image).
 fn painted_pixels(view: &PreparedView<'_>) -> f64 {
+    sampled_pixels(view, 1)
+}
+
+/// Every how many polygons the z-buffer's estimate measures one (and scales the sum):
+/// measuring every eighth of Sponza's at 1920x1080 still took 0.7 ms of a 12 ms render
+/// (the vertices are read out of order); every 64th is lost in the noise. The estimate
+/// only decides a refusal up front; the z-buffer also checks its deadline per band of
+/// rows.
+const ZBUFFER_SAMPLE_STRIDE: usize = 64;
+
+/// [`painted_pixels`] measured on every `stride`-th polygon, times `stride`.
+fn sampled_pixels(view: &PreparedView<'_>, stride: usize) -> f64 {
     let (starts, indices, _) = view.polygon_arrays();
     let vertices = view.vertices();
-    starts
-        .windows(2)
-        .map(|w| {
-            let ring = &indices[w[0] as usize..w[1] as usize];
-            let Some(&last) = ring.last() else {
-                return 0.0;
-            };
-            let mut prev = &vertices[last as usize];
-            let mut twice = 0.0;
-            for &i in ring {
-                let v = &vertices[i as usize];
-                twice += prev.x * v.y - v.x * prev.y;
-                prev = v;
-            }
-            0.5 * f64::abs(twice)
-        })
-        .sum()
+    let stride = stride.max(1);
+    stride as f64
+        * starts
+            .windows(2)
+            .step_by(stride)
+            .map(|w| {
+                let ring = &indices[w[0] as usize..w[1] as usize];
+                let Some(&last) = ring.last() else {
+                    return 0.0;
+                };
+                let mut prev = &vertices[last as usize];
+                let mut twice = 0.0;
+                for &i in ring {
+                    let v = &vertices[i as usize];
+                    twice += prev.x * v.y - v.x * prev.y;
+                    prev = v;
+                }
+                0.5 * f64::abs(twice)
+            })
+            .sum::<f64>()
 }
 
 /// The pixels of the image inside the screen rectangle of a world box (all of them
