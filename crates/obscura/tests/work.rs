@@ -37,6 +37,18 @@ fn stacked_squares(k: usize) -> Scene {
     .unwrap()
 }
 
+/// The scene from its default camera at `w` x `h`, prepared with the default options.
+fn default_view(scene: &Scene, w: u64, h: u64) -> obscura::PreparedView<'_> {
+    let vp = Viewport::new(w, h).unwrap();
+    prepare(
+        scene,
+        &scene.default_camera(vp.aspect()),
+        vp,
+        &PrepareOptions::default(),
+    )
+    .unwrap()
+}
+
 /// Looking down -z at the squares: every one covers the whole image.
 fn camera() -> Camera {
     Camera::orthographic(
@@ -146,14 +158,7 @@ fn work_over_the_limit_is_refused_before_it_starts() {
 #[test]
 fn every_algorithm_stops_at_a_spent_limit() {
     let scene = demo::cube();
-    let vp = Viewport::new(64, 48).unwrap();
-    let view = prepare(
-        &scene,
-        &scene.default_camera(vp.aspect()),
-        vp,
-        &PrepareOptions::default(),
-    )
-    .unwrap();
+    let view = default_view(&scene, 64, 48);
     let options = RenderOptions::default().with_time_limit(Some(Duration::ZERO));
     for algorithm in Algorithm::ALL {
         match render(algorithm, &view, &options) {
@@ -184,14 +189,7 @@ fn assert_stopped<T>(what: &str, r: obscura::Result<T>) {
 fn the_loops_of_every_algorithm_check_the_stop_flag() {
     // Each algorithm's own entry point: only its loops can see the flag.
     let scene = demo::overlapping_triangles(400, 3);
-    let vp = Viewport::new(96, 64).unwrap();
-    let view = prepare(
-        &scene,
-        &scene.default_camera(vp.aspect()),
-        vp,
-        &PrepareOptions::default(),
-    )
-    .unwrap();
+    let view = default_view(&scene, 96, 64);
     let o = stopped();
     assert_stopped("z-buffer", surface::zbuffer::render(&view, &o));
     assert_stopped("scanline", surface::scanline::render(&view, &o));
@@ -231,14 +229,7 @@ fn a_limit_passing_during_the_work_stops_it() {
     // Seconds of work each (5,000 large overlapping triangles at 640x480), stopped at
     // 20 ms: by the estimate or by the loops.
     let scene = demo::overlapping_triangles(5000, 9);
-    let vp = Viewport::new(640, 480).unwrap();
-    let view = prepare(
-        &scene,
-        &scene.default_camera(vp.aspect()),
-        vp,
-        &PrepareOptions::default(),
-    )
-    .unwrap();
+    let view = default_view(&scene, 640, 480);
     let options = RenderOptions::default().with_time_limit(Some(Duration::from_millis(20)));
     for algorithm in [
         Algorithm::DepthSort,
