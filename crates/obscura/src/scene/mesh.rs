@@ -141,6 +141,15 @@ impl Mesh {
         self.polygon_face.len()
     }
 
+    /// Number of triangles its polygons make (a polygon of `n` vertices makes `n - 2`).
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.polygon_starts
+            .windows(2)
+            .map(|w| (w[1] - w[0]) as usize - 2)
+            .sum()
+    }
+
     /// Number of face ids this mesh uses (including dropped degenerate faces).
     #[must_use]
     pub fn face_count(&self) -> u32 {

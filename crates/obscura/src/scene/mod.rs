@@ -406,16 +406,7 @@ impl Scene {
     /// Number of triangles the polygons would make.
     #[must_use]
     pub fn triangle_count(&self) -> usize {
-        self.objects
-            .iter()
-            .map(|o| {
-                let (starts, _, _) = o.mesh.polygon_arrays();
-                starts
-                    .windows(2)
-                    .map(|w| (w[1] - w[0]) as usize - 2)
-                    .sum::<usize>()
-            })
-            .sum()
+        self.objects.iter().map(|o| o.mesh.triangle_count()).sum()
     }
 
     /// The world-space box of everything.

@@ -216,27 +216,10 @@ impl BspVisitor for Visitor<'_> {
         if b.is_empty() {
             return false;
         }
-        let (mut minx, mut miny, mut maxx, mut maxy) = (
-            f64::INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NEG_INFINITY,
-        );
-        for c in b.corners() {
-            let clip = self.t.world_to_clip(c);
-            // A corner behind the eye plane: its projection bounds nothing.
-            if !(clip.w > 0.0) {
-                return true;
-            }
-            let (x, y) = (
-                (clip.x / clip.w + 1.0) * 0.5 * self.t.width,
-                (1.0 - clip.y / clip.w) * 0.5 * self.t.height,
-            );
-            minx = minx.min(x);
-            maxx = maxx.max(x);
-            miny = miny.min(y);
-            maxy = maxy.max(y);
-        }
+        // A corner behind the eye plane: its projection bounds nothing.
+        let Some((minx, miny, maxx, maxy)) = self.t.screen_box(b) else {
+            return true;
+        };
         // No pixel centre in the box (widened far above rounding): nothing to paint.
         const WIDEN: f64 = 1e-6;
         if maxx + WIDEN < 0.5

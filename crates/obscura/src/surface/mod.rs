@@ -341,14 +341,8 @@ pub(crate) fn render_indexed(
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
     let start = Instant::now();
-    let options = &options.clone().started();
-    options.check_time(algorithm.name())?;
+    let options = &begin(algorithm, options, |o| estimate(algorithm, view, o))?;
     check_budget(algorithm, view, options)?;
-    if options.time_limit.is_some()
-        && let Some(estimate) = estimate(algorithm, view, options)
-    {
-        options.deadline.admit(&estimate)?;
-    }
     use AlgorithmStats as S;
     let (frame, stats) = match algorithm {
         Algorithm::ZBuffer => zbuffer::render(view, options).map(|(f, s)| (f, S::ZBuffer(s))),
@@ -368,6 +362,24 @@ pub(crate) fn render_indexed(
     ))
 }
 
+/// The options of a render starting now: its deadline started, ended at once when the
+/// limit is spent or the stop flag raised, and the work refused when `estimate` (only
+/// asked with a time limit) passes the time left (see [`crate::work`]).
+fn begin(
+    algorithm: Algorithm,
+    options: &RenderOptions,
+    estimate: impl FnOnce(&RenderOptions) -> Option<crate::work::Estimate>,
+) -> Result<RenderOptions> {
+    let options = options.clone().started();
+    options.check_time(algorithm.name())?;
+    if options.time_limit.is_some()
+        && let Some(e) = estimate(&options)
+    {
+        options.deadline.admit(&e)?;
+    }
+    Ok(options)
+}
+
 /// Renders a [`View`] with an algorithm that needs no screen polygons
 /// ([`Algorithm::needs_polygons`] false), the structures taken from `index`. The
 /// budget check counts the view's front faces of kept objects for its polygons (the
@@ -379,13 +391,7 @@ pub(crate) fn render_view_indexed(
     options: &RenderOptions,
 ) -> Result<(Frame, Stats)> {
     let start = Instant::now();
-    let options = &options.clone().started();
-    options.check_time(algorithm.name())?;
-    if options.time_limit.is_some()
-        && let Some(estimate) = estimate_view(algorithm, view, options)
-    {
-        options.deadline.admit(&estimate)?;
-    }
+    let options = &begin(algorithm, options, |o| estimate_view(algorithm, view, o))?;
     let polygons = view
         .culled_polygons()
         .iter()
@@ -512,12 +518,7 @@ pub fn estimate_view(
                 .scene()
                 .objects()
                 .iter()
-                .map(|o| {
-                    let (starts, _, _) = o.mesh.polygon_arrays();
-                    let triangles: usize =
-                        starts.windows(2).map(|w| (w[1] - w[0]) as usize - 2).sum();
-                    screen_rect_pixels(view, &o.bounds) * triangles as f64
-                })
+                .map(|o| screen_rect_pixels(view, &o.bounds) * o.mesh.triangle_count() as f64)
                 .sum();
             Some(Estimate::new(
                 name,
@@ -580,38 +581,18 @@ fn sampled_pixels(view: &PreparedView<'_>, stride: usize) -> f64 {
 fn screen_rect_pixels(view: &View<'_>, b: &crate::geom::Aabb) -> f64 {
     let vp = view.viewport();
     let (w, h) = (f64::from(vp.width), f64::from(vp.height));
-    let whole = w * h;
     if b.is_empty() {
         return 0.0;
     }
-    let (mut x0, mut y0, mut x1, mut y1) =
-        (f64::INFINITY, f64::INFINITY, -f64::INFINITY, -f64::INFINITY);
-    for k in 0..8 {
-        let c = glam::DVec3::new(
-            if k & 1 == 0 { b.min.x } else { b.max.x },
-            if k & 2 == 0 { b.min.y } else { b.max.y },
-            if k & 4 == 0 { b.min.z } else { b.max.z },
-        );
-        let clip = view.transform().world_to_clip(c);
-        if !(clip.w > 0.0) {
-            return whole;
-        }
-        // Normalised device coordinates to pixels (y down).
-        let (x, y) = (
-            (clip.x / clip.w + 1.0) * 0.5 * w,
-            (1.0 - clip.y / clip.w) * 0.5 * h,
-        );
-        x0 = x0.min(x);
-        x1 = x1.max(x);
-        y0 = y0.min(y);
-        y1 = y1.max(y);
-    }
+    let Some((x0, y0, x1, y1)) = view.transform().screen_box(b) else {
+        return w * h;
+    };
     let cw = (x1.min(w) - x0.max(0.0)).max(0.0);
     let ch = (y1.min(h) - y0.max(0.0)).max(0.0);
     if cw.is_finite() && ch.is_finite() {
         cw * ch
     } else {
-        whole
+        w * h
     }
 }
 

@@ -170,6 +170,31 @@ impl ViewTransform {
         self.eye_to_clip(self.world_to_eye(p))
     }
 
+    /// The pixel rectangle `(min x, min y, max x, max y)` (y down, not clipped to the
+    /// image) that the corners of a world box project to; `None` when a corner is at
+    /// or behind the eye plane (its projection bounds nothing).
+    #[must_use]
+    pub fn screen_box(&self, b: &crate::geom::Aabb) -> Option<(f64, f64, f64, f64)> {
+        let mut r = (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for c in b.corners() {
+            let clip = self.world_to_clip(c);
+            if !(clip.w > 0.0) {
+                return None;
+            }
+            let (x, y) = (
+                (clip.x / clip.w + 1.0) * 0.5 * self.width,
+                (1.0 - clip.y / clip.w) * 0.5 * self.height,
+            );
+            r = (r.0.min(x), r.1.min(y), r.2.max(x), r.3.max(y));
+        }
+        Some(r)
+    }
+
     /// The six planes of the view volume in eye space (see [`frustum_planes`]), for
     /// [`Self::object_containment`].
     #[must_use]
