@@ -293,7 +293,7 @@ mod tests {
     use super::*;
 
     use crate::raster::PolygonCoverage;
-    use crate::scene::demo::SplitMix64;
+    use crate::rng::SplitMix64;
 
     fn random_polygon(rng: &mut SplitMix64, scale: f64, n: usize) -> Vec<(f64, f64, f64)> {
         // A convex polygon: points on an ellipse at sorted random angles.

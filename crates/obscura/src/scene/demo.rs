@@ -20,10 +20,7 @@ use glam::{DMat4, DVec3};
 use super::{Camera, Mesh, MeshBuilder, ObjectDesc, Scene};
 use crate::{Error, Result};
 
-/// Kept at its old path while other branches still name it here; the generator lives
-/// in [`crate::rng`].
-#[doc(hidden)]
-pub use crate::rng::SplitMix64;
+use crate::rng::SplitMix64;
 
 /// The names [`Scene::demo`] (and the CLI's `demo:NAME`) accepts.
 pub const NAMES: [&str; 6] = [

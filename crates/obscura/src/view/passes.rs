@@ -689,7 +689,7 @@ mod tests {
     fn eight_vertices_at_once_are_one_at_a_time_bit_for_bit() {
         // Points in, out of and behind the view volume, on its planes, and not finite,
         // through a perspective and an orthographic camera.
-        let mut rng = crate::scene::demo::SplitMix64(41);
+        let mut rng = crate::rng::SplitMix64(41);
         let specials = [
             f64::NAN,
             f64::INFINITY,

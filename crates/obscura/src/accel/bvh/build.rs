@@ -659,7 +659,7 @@ fn range_bounds(prims: &[Prim]) -> (Box3, Box3) {
 mod tests {
     use super::*;
     use crate::accel::bvh::{f32_down, f32_up};
-    use crate::scene::demo::SplitMix64;
+    use crate::rng::SplitMix64;
 
     #[test]
     fn branch_free_rounding_equals_the_reference() {

@@ -446,7 +446,7 @@ mod tests {
     use crate::accel::bvh::BvhNode;
     use crate::accel::bvh::packet_lanes::PacketLanes;
     use crate::accel::bvh::traverse::BoxRay;
-    use crate::scene::demo::SplitMix64;
+    use crate::rng::SplitMix64;
 
     /// The lane-by-lane preparation (compiled for the baseline here, and for AVX-512
     /// where `prepare` picks it) gives every ray exactly what the single-ray

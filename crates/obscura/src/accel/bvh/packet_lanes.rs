@@ -467,7 +467,7 @@ mod tests {
     use crate::accel::triangles::{OrderXzy, OrderYxz, PrimaryRays, TieRule, WatertightRay};
     #[cfg(target_arch = "x86_64")]
     use crate::cpu::Avx512;
-    use crate::scene::demo::SplitMix64;
+    use crate::rng::SplitMix64;
     use crate::scene::{Camera, Viewport};
 
     fn tie() -> TieRule {

@@ -489,13 +489,13 @@ mod tests {
         // of coordinates, directions of any length, and boxes ahead of the origin or
         // behind it (a negative near limit). The single-precision test must report
         // every box, entered no later than the exact ray enters it.
-        let mut rng = demo::SplitMix64(4);
+        let mut rng = crate::rng::SplitMix64(4);
         let f32_exact = |v: f64| f64::from(v as f32);
         for case in 0..20_000 {
             let size: f64 = [1e-4, 1.0, 1e4][case % 3];
             let offset = [0.0, 1.0, 1e3, 1e6][(case / 3) % 4] * size.max(1.0);
             let centre = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.0) * offset;
-            let v = |rng: &mut demo::SplitMix64, a: f64, b: f64| {
+            let v = |rng: &mut crate::rng::SplitMix64, a: f64, b: f64| {
                 DVec3::new(rng.range(a, b), rng.range(a, b), rng.range(a, b))
             };
             // Box corners that are `f32` values, so the node holds the box exactly.

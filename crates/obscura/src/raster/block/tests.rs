@@ -5,7 +5,7 @@ use super::setup::whole_to_u32;
 use super::*;
 use crate::raster::lanes::{Lanes, Portable, key_of};
 use crate::raster::{FillRule, PixelRect};
-use crate::scene::demo::SplitMix64;
+use crate::rng::SplitMix64;
 
 /// The bits of a setup, for comparisons that tell `-0.0` from `0.0` and accept
 /// equal NaNs.

@@ -467,7 +467,7 @@ mod tests {
         use crate::raster::{FillRule, PolygonSetup, TriangleSetup};
         // Polygons of 3 to 8 vertices on ellipses of many sizes and places: sub-pixel,
         // on sample lines, crossing the image's borders, off the image.
-        let mut rng = crate::scene::demo::SplitMix64(0x2545_f491_4f6c_dd1d);
+        let mut rng = crate::rng::SplitMix64(0x2545_f491_4f6c_dd1d);
         let mut next = || rng.next_f64();
         let (w, h) = (64, 48);
         let mut set_up = 0;

@@ -3,7 +3,8 @@ use glam::DVec3;
 use super::*;
 use crate::cull::backface::BackfaceMode;
 use crate::raster::FillRule;
-use crate::scene::demo::{self, SplitMix64};
+use crate::rng::SplitMix64;
+use crate::scene::demo;
 use crate::scene::random::{
     coplanar_grid, interpenetrating_quads, long_thin_triangles, orbit_cameras, random_triangles,
 };
