@@ -50,6 +50,7 @@ mod error;
 pub mod frame;
 pub mod geom;
 pub mod index;
+pub mod lines;
 mod memory;
 pub mod raster;
 #[doc(hidden)]

@@ -1,0 +1,32 @@
+//! Hidden lines: drawings made of line pieces, each with its source edge, its kind and
+//! its quantitative invisibility (the number of faces in front of it; 0 = visible).
+//!
+//! Three algorithms from the lecture notes (seed 004, seed 000; `docs/lines.md`):
+//! - [`hlr`]: exact hidden-line removal for any triangle or polygon mesh. Feature edges
+//!   (silhouettes, creases, boundaries, borders, intersection lines; [`edges`]) are cut
+//!   wherever their image crosses an occluding face's edge, and each piece gets the
+//!   number of faces in front of it (Appel 1967, "The notion of quantitative
+//!   invisibility and the machine rendering of solids").
+//! - [`roberts`]: Roberts' algorithm for scenes of convex polyhedra (Roberts 1963,
+//!   "Machine perception of three-dimensional solids").
+//! - [`horizon`]: the floating horizon for surfaces `y = f(x, z)` (Wright 1973, "A
+//!   two-space solution to the hidden line problem for plotting functions of two
+//!   variables"), with exact piecewise-linear horizons.
+//!
+//! A [`Drawing`] is independent of its output: [`svg`] writes it for people and pen
+//! plotters (layers, millimetres on a page, joined and ordered polylines).
+
+mod drawing;
+pub mod edges;
+pub mod hlr;
+pub mod horizon;
+pub mod roberts;
+pub mod svg;
+
+pub use drawing::{Drawing, DrawnEdge, EdgeKind, EdgeKinds, Piece};
+
+use std::sync::Arc;
+
+/// A progress callback for long work: `(done, total)` in units of the work's choosing
+/// (edges for hidden-line removal). Called from any thread, often; keep it cheap.
+pub type Progress = Arc<dyn Fn(u64, u64) + Send + Sync>;

@@ -1,0 +1,1 @@
+//! SVG output of a [`super::Drawing`] (placeholder).
