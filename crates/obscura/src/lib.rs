@@ -63,6 +63,6 @@ pub mod work;
 pub use error::{Error, Result};
 pub use frame::{BACKGROUND, Frame, RgbImage};
 pub use index::SceneIndex;
-pub use scene::{Camera, Projection, Scene, Viewport};
+pub use scene::{Camera, Lens, Projection, Scene, Viewport};
 pub use surface::{Algorithm, RenderOptions, Stats, render};
 pub use view::{PrepareOptions, PreparedView, View, prepare};

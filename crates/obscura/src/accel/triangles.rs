@@ -289,14 +289,16 @@ impl PrimaryRays {
 
     /// The largest coordinate, in absolute value, of the rays' origins: the eye's for
     /// a perspective camera; for an orthographic one, whose rays start across the
-    /// window on the eye plane, the eye's plus the window's half extents (`right` and
-    /// `up` are unit vectors).
+    /// window on the eye plane, the eye's plus how far the window reaches from the
+    /// view axis (its half extents, more when shifted; `right` and `up` are unit
+    /// vectors).
     #[must_use]
     pub(crate) fn origin_magnitude(&self) -> f64 {
         let r = &self.rays;
         let eye = r.eye.abs().max_element();
         if r.orthographic {
-            eye + r.half_width.abs() + r.half_height.abs()
+            let (x, y) = r.window_reach();
+            eye + x + y
         } else {
             eye
         }

@@ -3,8 +3,14 @@
 //! Conventions (see `docs/ARCHITECTURE.md`): right-handed world; the camera looks down
 //! `-z` in eye space; OpenGL clip space `-w <= x, y, z <= w`; `gluLookAt` and
 //! `gluPerspective` semantics (vertical field of view in degrees).
+//!
+//! A camera's [`Lens`] moves its image window off the view axis (a lens shift: the
+//! off-centre frustum of OpenGL's `glFrustum` and `glOrtho`, the principal point of a
+//! pinhole camera away from the image centre) and gives its pixels an aspect ratio
+//! (unequal focal lengths `fx != fy`). The default lens is centred with square pixels,
+//! and every computation then gives the bits it gave before lenses existed.
 
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use crate::geom::Aabb;
 use crate::{Error, Result};
@@ -25,6 +31,73 @@ pub enum Projection {
     },
 }
 
+/// Where a camera's image window lies relative to its view axis, and the shape of its
+/// pixels.
+///
+/// The window of a centred camera spans `[-w, w] x [-h, h]`: at unit depth for a
+/// perspective camera (`h = tan(fov_y / 2)`), in world units for an orthographic one
+/// (`h = height / 2`), with `w = h * aspect * pixel_aspect` for a viewport's `aspect =
+/// width / height`. A shift moves the whole window, in units of its own width and
+/// height: it spans `[(2 sx - 1) w, (2 sx + 1) w] x [(2 sy - 1) h, (2 sy + 1) h]`. The
+/// view direction, the eye and the depths do not change; what the window shows moves.
+///
+/// # Use cases
+/// - Architectural views (a shift lens): shift up to show a tall building's top
+///   without tilting the camera, so its verticals stay parallel.
+/// - Pinhole cameras whose principal point `(cx, cy)` is off the image centre and whose
+///   focal lengths differ ([`Camera::from_intrinsics`] sets both from `fx, fy, cx, cy`).
+/// - Tiles of a larger picture: the camera of a sub-window of a view is the same camera
+///   with a narrower field of view and a shift, and renders exactly that part of it.
+/// - Asymmetric projection matrices (`glFrustum`, `glOrtho` with `l != -r`, off-axis
+///   stereo): [`Camera::from_matrices`] reads them into a lens.
+///
+/// ```
+/// use glam::{DVec2, DVec3};
+/// use obscura::{Camera, Lens, Viewport};
+/// // A window moved a quarter of its width to the right: the view axis, which the
+/// // centred camera sees at the image centre, is seen at x = 1/4 of the width.
+/// let mut cam = Camera::perspective(DVec3::Z * 5.0, DVec3::ZERO, DVec3::Y, 60.0, 1.0, 10.0);
+/// cam.lens = Lens { shift: DVec2::new(0.25, 0.0), ..Lens::CENTRED };
+/// let vp = Viewport::new(400, 300)?;
+/// let axis = cam.ray(vp, 100.0, 150.0);
+/// assert!((axis.direction - DVec3::NEG_Z).length() < 1e-12);
+/// # Ok::<(), obscura::Error>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lens {
+    /// The shift of the image window, in units of its width (`x`, right) and height
+    /// (`y`, up): `(0.5, 0)` moves the window right by half its width, so that the
+    /// view axis is seen at the left edge. Finite; zero for a centred camera.
+    pub shift: DVec2,
+    /// The width of a pixel over its height, in the world seen (a pinhole camera's
+    /// `fy / fx`): the window is `pixel_aspect` times wider than square pixels make
+    /// it. Positive and finite; 1 for square pixels.
+    pub pixel_aspect: f64,
+}
+
+impl Lens {
+    /// A centred window with square pixels: what [`Camera::perspective`] and
+    /// [`Camera::orthographic`] give.
+    pub const CENTRED: Lens = Lens {
+        shift: DVec2::ZERO,
+        pixel_aspect: 1.0,
+    };
+
+    /// The centre of the window in normalized device coordinates, `2 shift` (`-0` made
+    /// `+0`, so that a zero shift changes no bit of any coordinate).
+    #[inline]
+    #[must_use]
+    pub(crate) fn ndc_centre(&self) -> DVec2 {
+        self.shift * 2.0 + DVec2::ZERO
+    }
+}
+
+impl Default for Lens {
+    fn default() -> Self {
+        Lens::CENTRED
+    }
+}
+
 /// The allowance of [`Camera::near_limit`], relative to `near`.
 pub const NEAR_ALLOWANCE: f64 = 1.0 / (1u64 << 40) as f64;
 
@@ -43,6 +116,9 @@ pub struct Camera {
     pub near: f64,
     /// Distance of the far clipping plane (> near).
     pub far: f64,
+    /// Where the image window lies relative to the view axis, and the pixels' aspect
+    /// ratio: [`Lens::CENTRED`] unless set.
+    pub lens: Lens,
 }
 
 /// A ray from a camera through a point of the image.
@@ -67,6 +143,8 @@ pub(crate) struct ImageRays {
     pub(crate) eye: DVec3,
     pub(crate) half_width: f64,
     pub(crate) half_height: f64,
+    /// The window's centre in units of its half extents ([`Lens::ndc_centre`]).
+    centre: DVec2,
     width: f64,
     height: f64,
     pub(crate) orthographic: bool,
@@ -84,6 +162,7 @@ impl ImageRays {
             eye: camera.eye,
             half_width,
             half_height,
+            centre: camera.lens.ndc_centre(),
             width: f64::from(viewport.width),
             height: f64::from(viewport.height),
             orthographic: matches!(camera.projection, Projection::Orthographic { .. }),
@@ -91,17 +170,28 @@ impl ImageRays {
     }
 
     /// The window coordinate of image column `px`: `-half_width` at the left edge,
-    /// `half_width` at the right.
+    /// `half_width` at the right, both moved by the lens's shift. (A zero shift adds
+    /// `+0` to `2 px / width - 1`, which is never `-0`: the same bits as without it.)
     #[inline]
     pub(crate) fn window_x(&self, px: f64) -> f64 {
-        (2.0 * px / self.width - 1.0) * self.half_width
+        (2.0 * px / self.width - 1.0 + self.centre.x) * self.half_width
     }
 
     /// The window coordinate of image row `py`: `half_height` at the top (row 0),
-    /// `-half_height` at the bottom.
+    /// `-half_height` at the bottom, both moved by the lens's shift.
     #[inline]
     pub(crate) fn window_y(&self, py: f64) -> f64 {
-        (1.0 - 2.0 * py / self.height) * self.half_height
+        (1.0 - 2.0 * py / self.height + self.centre.y) * self.half_height
+    }
+
+    /// The largest absolute window coordinates `(x, y)` of the image: the half extents
+    /// for a centred window, more for a shifted one.
+    #[must_use]
+    pub(crate) fn window_reach(&self) -> (f64, f64) {
+        (
+            (self.centre.x.abs() + 1.0) * self.half_width.abs(),
+            (self.centre.y.abs() + 1.0) * self.half_height.abs(),
+        )
     }
 
     /// The ray `(origin, direction)` through window point `(sx, sy)`: from the eye
@@ -149,6 +239,7 @@ impl Camera {
             projection: Projection::Perspective { fov_y_degrees },
             near,
             far,
+            lens: Lens::CENTRED,
         }
     }
 
@@ -169,6 +260,7 @@ impl Camera {
             projection: Projection::Orthographic { height },
             near,
             far,
+            lens: Lens::CENTRED,
         }
     }
 
@@ -243,6 +335,15 @@ impl Camera {
                 self.near, self.far
             ));
         }
+        let lens = &self.lens;
+        if !(lens.shift.is_finite() && lens.pixel_aspect.is_finite() && lens.pixel_aspect > 0.0)
+        {
+            return bad(format!(
+                "lens shift {:?} must be finite and pixel aspect {:e} positive and finite",
+                lens.shift.to_array(),
+                lens.pixel_aspect
+            ));
+        }
         match self.projection {
             Projection::Perspective { fov_y_degrees } => {
                 if !(fov_y_degrees > 0.0 && fov_y_degrees < 180.0) {
@@ -292,8 +393,18 @@ impl Camera {
     /// assert!(narrow.validate().is_ok());
     /// assert!(narrow.validate_for(Viewport::new(64, 64).unwrap()).is_err());
     /// ```
+    ///
+    /// A camera with a shifted window or non-square pixels (see [`Lens`]) must also keep
+    /// its window within [`super::MAX_COORDINATE`] (at unit depth for a perspective
+    /// camera, in world units for an orthographic one), and, for a perspective camera,
+    /// its pixels at the window's farthest edge (where a pixel spans the smallest
+    /// angle, `pixel / (1 + edge^2)` radians) at least [`Camera::MIN_PIXEL_ANGLE`],
+    /// across and down.
     pub fn validate_for(&self, viewport: Viewport) -> Result<()> {
         self.validate()?;
+        if self.lens != Lens::CENTRED {
+            self.validate_lens(viewport)?;
+        }
         if let Projection::Perspective { fov_y_degrees } = self.projection {
             let pixel = fov_y_degrees.to_radians() / f64::from(viewport.height.max(1));
             if pixel < Self::MIN_PIXEL_ANGLE {
@@ -309,6 +420,45 @@ impl Camera {
         Ok(())
     }
 
+    /// The checks of [`Camera::validate_for`] that only a shifted window or non-square
+    /// pixels need.
+    fn validate_lens(&self, viewport: Viewport) -> Result<()> {
+        let rays = ImageRays::new(self, viewport);
+        let (reach_x, reach_y) = rays.window_reach();
+        let limit = super::MAX_COORDINATE;
+        let lens = format!(
+            "lens shift {:?} and pixel aspect {:e}",
+            self.lens.shift.to_array(),
+            self.lens.pixel_aspect
+        );
+        if !(reach_x <= limit && reach_y <= limit) {
+            return Err(Error::InvalidCamera(format!(
+                "{lens}: the image window reaches {:e} off the view axis, beyond the \
+                 largest accepted, {limit:e}",
+                reach_x.max(reach_y)
+            )));
+        }
+        if let Projection::Perspective { .. } = self.projection {
+            let sides = [
+                ("across", rays.half_width, reach_x, viewport.width),
+                ("down", rays.half_height, reach_y, viewport.height),
+            ];
+            for (side, half, reach, count) in sides {
+                let pixel = 2.0 * half / f64::from(count.max(1));
+                let angle = pixel / reach.mul_add(reach, 1.0);
+                if !(angle >= Self::MIN_PIXEL_ANGLE) {
+                    return Err(Error::InvalidCamera(format!(
+                        "{lens}: a pixel at the window's edge spans {angle:.1e} radians \
+                         {side}, below the smallest accepted, {:.1e} (directions from the \
+                         eye are not resolved that finely in double precision)",
+                        Self::MIN_PIXEL_ANGLE
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Refuses an orthographic window whose pixels are narrower than the rounding of
     /// the coordinates they are computed from: `4 eps` of `magnitude`, the largest
     /// absolute coordinate of the eye and of the scene (see [`crate::view::prepare`],
@@ -318,8 +468,18 @@ impl Camera {
     /// are checked by angle instead ([`Camera::validate_for`]).
     pub fn validate_window(&self, viewport: Viewport, magnitude: f64) -> Result<()> {
         if let Projection::Orthographic { height } = self.projection {
+            // Across, a pixel is `pixel_aspect` times as wide (1 by default, so the
+            // `min` changes nothing then); a shifted window's rays start as far from
+            // the eye as the window reaches.
             let pixel = height / f64::from(viewport.height.max(1));
+            let pixel = pixel.min(pixel * self.lens.pixel_aspect);
             let magnitude = magnitude.max(self.eye.abs().max_element());
+            let magnitude = if self.lens == Lens::CENTRED {
+                magnitude
+            } else {
+                let (x, y) = ImageRays::new(self, viewport).window_reach();
+                magnitude.max(self.eye.abs().max_element() + x.max(y))
+            };
             let floor = 4.0 * f64::EPSILON * magnitude;
             if pixel < floor {
                 return Err(Error::InvalidCamera(format!(
@@ -364,9 +524,13 @@ impl Camera {
     }
 
     /// The half extents of the view window at unit depth (perspective) or in world
-    /// units (orthographic): `(half_width, half_height)`.
+    /// units (orthographic): `(half_width, half_height)`, for `aspect = width / height`
+    /// and the lens's pixel aspect. The window's centre is the lens's shift (see
+    /// [`Lens`]), not part of these.
     #[must_use]
     pub fn half_extents(&self, aspect: f64) -> (f64, f64) {
+        // Times a pixel aspect of 1: the same bits as without it.
+        let aspect = aspect * self.lens.pixel_aspect;
         match self.projection {
             Projection::Perspective { fov_y_degrees } => {
                 let h = (fov_y_degrees.to_radians() * 0.5).tan();
@@ -376,23 +540,41 @@ impl Camera {
         }
     }
 
-    /// Eye to clip space (`gluPerspective` or `glOrtho`), for `aspect = width / height`.
+    /// The view window `(left, right, bottom, top)` at unit depth (perspective) or in
+    /// world units (orthographic), for `aspect = width / height`: the half extents of
+    /// [`Camera::half_extents`] about the centre the lens's shift gives. `glFrustum`'s
+    /// arguments are these times `near`, `glOrtho`'s these.
+    #[must_use]
+    pub fn window(&self, aspect: f64) -> (f64, f64, f64, f64) {
+        let (hw, hh) = self.half_extents(aspect);
+        let c = self.lens.ndc_centre();
+        ((c.x - 1.0) * hw, (c.x + 1.0) * hw, (c.y - 1.0) * hh, (c.y + 1.0) * hh)
+    }
+
+    /// Eye to clip space for `aspect = width / height`: `gluPerspective` or `glOrtho`
+    /// for a centred lens, `glFrustum` or `glOrtho` of [`Camera::window`] for a shifted
+    /// one.
     #[must_use]
     pub fn projection_matrix(&self, aspect: f64) -> DMat4 {
         let (n, f) = (self.near, self.far);
         let (hw, hh) = self.half_extents(aspect);
+        // The window's centre in normalized device coordinates; zero (and then +0, so
+        // that the products below change no bit) for a centred lens.
+        let c = self.lens.ndc_centre();
         match self.projection {
+            // glFrustum: the third column's (r + l) / (r - l) and (t + b) / (t - b).
             Projection::Perspective { .. } => DMat4::from_cols(
                 DVec4::new(1.0 / hw, 0.0, 0.0, 0.0),
                 DVec4::new(0.0, 1.0 / hh, 0.0, 0.0),
-                DVec4::new(0.0, 0.0, (f + n) / (n - f), -1.0),
+                DVec4::new(c.x, c.y, (f + n) / (n - f), -1.0),
                 DVec4::new(0.0, 0.0, 2.0 * f * n / (n - f), 0.0),
             ),
+            // glOrtho: the last column's -(r + l) / (r - l) and -(t + b) / (t - b).
             Projection::Orthographic { .. } => DMat4::from_cols(
                 DVec4::new(1.0 / hw, 0.0, 0.0, 0.0),
                 DVec4::new(0.0, 1.0 / hh, 0.0, 0.0),
                 DVec4::new(0.0, 0.0, -2.0 / (f - n), 0.0),
-                DVec4::new(0.0, 0.0, -(f + n) / (f - n), 1.0),
+                DVec4::new(0.0 - c.x, 0.0 - c.y, -(f + n) / (f - n), 1.0),
             ),
         }
     }

@@ -26,7 +26,7 @@ use glam::{DMat4, DVec3};
 pub use adjacency::{EdgeAdjacency, MeshEdge, is_convex_closed};
 pub use arrays::Faces;
 pub(crate) use camera::ImageRays;
-pub use camera::{Camera, Projection, Ray, Viewport};
+pub use camera::{Camera, Lens, Projection, Ray, Viewport};
 pub use camera_matrices::Intrinsics;
 
 /// The largest magnitude of a world coordinate (and of a camera's position and planes)

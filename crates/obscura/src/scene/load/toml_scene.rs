@@ -741,6 +741,7 @@ impl SceneReader<'_, '_> {
             projection,
             near: 1.0,
             far: 2.0,
+            lens: crate::scene::Lens::CENTRED,
         };
         camera.fit_depth_range(&scene.bounds());
         if let Some(n) = c.near {
