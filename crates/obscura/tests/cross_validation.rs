@@ -7,7 +7,7 @@
 //! two nearest polygons there have depths within `DEPTH_TIE` (relative). A scene without
 //! near ties therefore has to match on 100% of its pixels.
 
-use glam::{DMat4, DVec3};
+use glam::{DMat4, DVec2, DVec3};
 use obscura::cull::backface::BackfaceMode;
 use obscura::raster::FillRule;
 use obscura::scene::random::{
@@ -16,7 +16,7 @@ use obscura::scene::random::{
 };
 use obscura::scene::{Camera, ObjectDesc, demo};
 use obscura::surface::{Algorithm, AlgorithmStats, RenderOptions, render};
-use obscura::{Frame, PrepareOptions, PreparedView, Scene, Viewport, prepare};
+use obscura::{Frame, Lens, PrepareOptions, PreparedView, Scene, Viewport, prepare};
 
 const EDGE_TIE: f64 = 1e-4;
 const DEPTH_TIE: f64 = 1e-5;
@@ -128,23 +128,7 @@ fn cases() -> Vec<Case> {
         9,
     ));
     // Solids that interpenetrate, with n-gons (cone base, box quads).
-    let inter = combine(&[
-        (
-            solid(
-                demo::box_mesh(DVec3::splat(-0.6), DVec3::splat(0.6)),
-                DMat4::from_rotation_y(0.3),
-            ),
-            DMat4::IDENTITY,
-        ),
-        (
-            solid(demo::uv_sphere_mesh(0.7, 24, 12), DMat4::IDENTITY),
-            DMat4::from_translation(DVec3::new(0.5, 0.3, 0.2)),
-        ),
-        (
-            solid(demo::cone_mesh(0.5, 1.6, 11), DMat4::IDENTITY),
-            DMat4::from_translation(DVec3::new(-0.4, -0.5, 0.3)),
-        ),
-    ]);
+    let inter = interpenetrating_solids();
     v.push(case("interpenetrating solids", inter, 10));
     let mut open = case(
         "interpenetrating solids, back faces kept",
@@ -218,7 +202,52 @@ fn cases() -> Vec<Case> {
         ),
     ];
     v.push(c);
+    // Off-centre windows and non-square pixels (a camera's lens): shifted right and
+    // down with wide pixels, shifted so far that the view axis is outside the picture
+    // with narrow ones, and an orthographic window shifted left.
+    let mut c = case("interpenetrating solids through shifted lenses", interpenetrating_solids(), 19);
+    let lens = |x: f64, y: f64, pixel_aspect: f64| Lens {
+        shift: DVec2::new(x, y),
+        pixel_aspect,
+    };
+    let eye = DVec3::new(1.2, 1.0, 3.2);
+    c.cameras = vec![
+        Camera {
+            lens: lens(0.2, -0.15, 1.3),
+            ..Camera::perspective(eye, DVec3::ZERO, DVec3::Y, 40.0, 0.5, 20.0)
+        },
+        Camera {
+            lens: lens(-0.7, 0.55, 0.8),
+            ..Camera::perspective(eye, DVec3::new(1.0, -0.8, 0.0), DVec3::Y, 35.0, 0.5, 20.0)
+        },
+        Camera {
+            lens: lens(-0.3, 0.1, 1.0),
+            ..Camera::orthographic(eye, DVec3::ZERO, DVec3::Y, 2.2, 0.1, 20.0)
+        },
+    ];
+    v.push(c);
     v
+}
+
+/// Interpenetrating solids (a box, a sphere and a cone) with n-gons.
+fn interpenetrating_solids() -> Scene {
+    combine(&[
+        (
+            solid(
+                demo::box_mesh(DVec3::splat(-0.6), DVec3::splat(0.6)),
+                DMat4::from_rotation_y(0.3),
+            ),
+            DMat4::IDENTITY,
+        ),
+        (
+            solid(demo::uv_sphere_mesh(0.7, 24, 12), DMat4::IDENTITY),
+            DMat4::from_translation(DVec3::new(0.5, 0.3, 0.2)),
+        ),
+        (
+            solid(demo::cone_mesh(0.5, 1.6, 11), DMat4::IDENTITY),
+            DMat4::from_translation(DVec3::new(-0.4, -0.5, 0.3)),
+        ),
+    ])
 }
 
 /// Brute force: whether pixel `(i, j)` is a near tie for the polygons of the view.
