@@ -25,8 +25,9 @@
 //!    culling the small ones cannot make cheaper, and the resolve of the frame), leaving
 //!    out `prepare`, the setup of every polygon and the binning.
 //!
-//! This is the measurement behind the speed figures of `docs/ARCHITECTURE.md`
-//! ("Depth" and "Coverage") and the closing notes of the z-buffer's issue.
+//! This is the measurement behind the speed figures of `docs/performance.md`
+//! ("Where the z-buffer's time goes", "Coverage") and the closing notes of the
+//! z-buffer's issue.
 
 use std::time::Instant;
 

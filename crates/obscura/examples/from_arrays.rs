@@ -28,13 +28,15 @@ fn main() -> Result<(), obscura::Error> {
         },
     )?;
 
-    // A 640x480 camera with a 500-pixel focal length, its principal point at the
-    // image centre (pixel centres at half-integers), placed by a look-at pose.
+    // A calibrated 640x480 camera, as a vision library reports it: focal lengths of
+    // about 500 pixels, not quite equal, and a principal point a little off the image
+    // centre (obscura puts pixel centres at half-integers: from OpenCV, add 0.5 to cx
+    // and cy). The camera's lens holds both; it is placed by a look-at pose.
     let k = Intrinsics {
-        fx: 500.0,
-        fy: 500.0,
-        cx: 320.0,
-        cy: 240.0,
+        fx: 502.3,
+        fy: 498.7,
+        cx: 318.2 + 0.5,
+        cy: 243.9 + 0.5,
         width: 640,
         height: 480,
     };
