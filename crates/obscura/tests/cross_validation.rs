@@ -205,7 +205,11 @@ fn cases() -> Vec<Case> {
     // Off-centre windows and non-square pixels (a camera's lens): shifted right and
     // down with wide pixels, shifted so far that the view axis is outside the picture
     // with narrow ones, and an orthographic window shifted left.
-    let mut c = case("interpenetrating solids through shifted lenses", interpenetrating_solids(), 19);
+    let mut c = case(
+        "interpenetrating solids through shifted lenses",
+        interpenetrating_solids(),
+        19,
+    );
     let lens = |x: f64, y: f64, pixel_aspect: f64| Lens {
         shift: DVec2::new(x, y),
         pixel_aspect,

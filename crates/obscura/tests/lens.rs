@@ -9,8 +9,8 @@ use glam::{DMat4, DVec2, DVec3, DVec4};
 use obscura::rng::SplitMix64;
 use obscura::scene::{Faces, Intrinsics};
 use obscura::{
-    Algorithm, Camera, Error, Frame, Lens, PrepareOptions, PreparedView, Projection,
-    RenderOptions, Scene, Viewport, prepare, render,
+    Algorithm, Camera, Error, Frame, Lens, PrepareOptions, PreparedView, Projection, RenderOptions,
+    Scene, Viewport, prepare, render,
 };
 
 /// Triangles in layers parallel to the image plane (each slightly tilted, none
@@ -97,7 +97,14 @@ fn assert_part_of(small: &Frame, big: &Frame, x0: u32, y0: u32, label: &str) -> 
 #[test]
 fn a_shifted_principal_point_shows_part_of_a_larger_centred_picture() {
     let scene = layered_triangles(11, 24);
-    let eye = Camera::perspective(DVec3::new(0.3, -0.2, 4.0), DVec3::ZERO, DVec3::Y, 40.0, 0.5, 20.0);
+    let eye = Camera::perspective(
+        DVec3::new(0.3, -0.2, 4.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        40.0,
+        0.5,
+        20.0,
+    );
     let view = eye.view_matrix();
     let (w, h) = (56u32, 40u32);
     let f = 60.0;
@@ -124,15 +131,25 @@ fn a_shifted_principal_point_shows_part_of_a_larger_centred_picture() {
         let big_cam = Camera::from_intrinsics(view, &centred, 0.5, 20.0).unwrap();
         let cam = Camera::from_intrinsics(view, &shifted, 0.5, 20.0).unwrap();
         assert_eq!(big_cam.lens, Lens::CENTRED);
-        assert_eq!(cam.lens.shift, DVec2::new(-dx / f64::from(w), dy / f64::from(h)));
+        assert_eq!(
+            cam.lens.shift,
+            DVec2::new(-dx / f64::from(w), dy / f64::from(h))
+        );
         let (big_vp, vp) = (centred.viewport().unwrap(), shifted.viewport().unwrap());
         let (x0, y0) = ((dx.abs() - dx) as u32, (dy.abs() - dy) as u32);
         // No edge passes within rounding of a compared pixel centre (else the test
         // would compare rounding, not geometry).
         let big_view = prepare(&scene, &big_cam, big_vp, &PrepareOptions::default()).unwrap();
         let clearance = edge_clearance(&big_view, (x0, y0, w, h));
-        assert!(clearance > 1e-4, "({dx}, {dy}): an edge {clearance:e} px from a pixel centre");
-        for algorithm in [Algorithm::ZBuffer, Algorithm::Raycast, Algorithm::RaycastBvh] {
+        assert!(
+            clearance > 1e-4,
+            "({dx}, {dy}): an edge {clearance:e} px from a pixel centre"
+        );
+        for algorithm in [
+            Algorithm::ZBuffer,
+            Algorithm::Raycast,
+            Algorithm::RaycastBvh,
+        ] {
             let big = frame(&scene, &big_cam, big_vp, algorithm);
             let small = frame(&scene, &cam, vp, algorithm);
             let label = format!("{algorithm}, principal point moved by ({dx}, {dy})");
@@ -140,8 +157,19 @@ fn a_shifted_principal_point_shows_part_of_a_larger_centred_picture() {
             assert!(covered > 300, "{label}: only {covered} pixels covered");
             // The part differs from the centred picture of the same size: the shift
             // is not a no-op.
-            let same_size = frame(&scene, &Camera { lens: Lens::CENTRED, ..cam }, vp, algorithm);
-            assert!(same_size.differences(&small).len() > 20, "{label}: nothing moved");
+            let same_size = frame(
+                &scene,
+                &Camera {
+                    lens: Lens::CENTRED,
+                    ..cam
+                },
+                vp,
+                algorithm,
+            );
+            assert!(
+                same_size.differences(&small).len() > 20,
+                "{label}: nothing moved"
+            );
         }
     }
 }
@@ -182,8 +210,15 @@ fn a_shifted_orthographic_window_shows_part_of_a_larger_one() {
     let (x0, y0) = (2 * mx, 0);
     let big_view = prepare(&scene, &big_cam, big_vp, &PrepareOptions::default()).unwrap();
     let clearance = edge_clearance(&big_view, (x0, y0, w, h));
-    assert!(clearance > 1e-4, "an edge {clearance:e} px from a pixel centre");
-    for algorithm in [Algorithm::ZBuffer, Algorithm::Raycast, Algorithm::RaycastGrid] {
+    assert!(
+        clearance > 1e-4,
+        "an edge {clearance:e} px from a pixel centre"
+    );
+    for algorithm in [
+        Algorithm::ZBuffer,
+        Algorithm::Raycast,
+        Algorithm::RaycastGrid,
+    ] {
         let big = frame(&scene, &big_cam, big_vp, algorithm);
         let small = frame(&scene, &cam, vp, algorithm);
         let covered = assert_part_of(&small, &big, x0, y0, &format!("orthographic {algorithm}"));
@@ -259,7 +294,11 @@ fn intrinsics_with_unequal_focal_lengths_put_points_where_the_pinhole_formula_sa
         triangles.push([base, base + 1, base + 2]);
     }
     let scene = Scene::from_arrays(&positions, Faces::Triangles(&triangles)).unwrap();
-    for algorithm in [Algorithm::ZBuffer, Algorithm::Raycast, Algorithm::RaycastBvh] {
+    for algorithm in [
+        Algorithm::ZBuffer,
+        Algorithm::Raycast,
+        Algorithm::RaycastBvh,
+    ] {
         let f = frame(&scene, &camera, vp, algorithm);
         for (id, &(u, v, _)) in targets.iter().enumerate() {
             let id = id as u32;
@@ -301,7 +340,12 @@ fn gl_frustum(l: f64, r: f64, b: f64, t: f64, n: f64, f: f64) -> DMat4 {
     DMat4::from_cols(
         DVec4::new(2.0 * n / (r - l), 0.0, 0.0, 0.0),
         DVec4::new(0.0, 2.0 * n / (t - b), 0.0, 0.0),
-        DVec4::new((r + l) / (r - l), (t + b) / (t - b), -(f + n) / (f - n), -1.0),
+        DVec4::new(
+            (r + l) / (r - l),
+            (t + b) / (t - b),
+            -(f + n) / (f - n),
+            -1.0,
+        ),
         DVec4::new(0.0, 0.0, -2.0 * f * n / (f - n), 0.0),
     )
 }
@@ -312,7 +356,12 @@ fn gl_ortho(l: f64, r: f64, b: f64, t: f64, n: f64, f: f64) -> DMat4 {
         DVec4::new(2.0 / (r - l), 0.0, 0.0, 0.0),
         DVec4::new(0.0, 2.0 / (t - b), 0.0, 0.0),
         DVec4::new(0.0, 0.0, -2.0 / (f - n), 0.0),
-        DVec4::new(-(r + l) / (r - l), -(t + b) / (t - b), -(f + n) / (f - n), 1.0),
+        DVec4::new(
+            -(r + l) / (r - l),
+            -(t + b) / (t - b),
+            -(f + n) / (f - n),
+            1.0,
+        ),
     )
 }
 
@@ -346,36 +395,59 @@ fn asymmetric_gl_frustum_and_gl_ortho_matrices_come_back_unchanged() {
         let label = format!("glFrustum({l}, {r}, {b}, {t}, {n}, {f})");
         let m = gl_frustum(l, r, b, t, n, f);
         let cam = Camera::from_matrices(view, m, vp).unwrap();
-        assert!(matches!(cam.projection, Projection::Perspective { .. }), "{label}");
+        assert!(
+            matches!(cam.projection, Projection::Perspective { .. }),
+            "{label}"
+        );
         assert!((cam.near - n).abs() < 1e-12 * f && (cam.far - f).abs() < 1e-9 * f);
         assert_close(cam.projection_matrix(vp.aspect()), m, &label);
         // The window at unit depth is glFrustum's divided by near.
         let (wl, wr, wb, wt) = cam.window(vp.aspect());
         for (got, want) in [(wl, l), (wr, r), (wb, b), (wt, t)] {
-            assert!((got * n - want).abs() < 1e-12, "{label}: window {:?}", cam.window(vp.aspect()));
+            assert!(
+                (got * n - want).abs() < 1e-12,
+                "{label}: window {:?}",
+                cam.window(vp.aspect())
+            );
         }
         // The ray through the image's top-left corner goes through (l, t, -n) in eye space.
         let ray = cam.ray(vp, 0.0, 0.0);
         let corner = view.inverse().transform_point3(DVec3::new(l, t, -n));
         let expected = (corner - cam.eye).normalize();
-        assert!((ray.direction.normalize() - expected).length() < 1e-12, "{label}");
+        assert!(
+            (ray.direction.normalize() - expected).length() < 1e-12,
+            "{label}"
+        );
         assert_eq!(ray.origin, cam.eye);
         // And again through the camera's own matrices: the same camera.
-        let again = Camera::from_matrices(cam.view_matrix(), cam.projection_matrix(vp.aspect()), vp).unwrap();
+        let again =
+            Camera::from_matrices(cam.view_matrix(), cam.projection_matrix(vp.aspect()), vp)
+                .unwrap();
         assert!((again.lens.shift - cam.lens.shift).length() < 1e-12);
         assert!((again.lens.pixel_aspect - cam.lens.pixel_aspect).abs() < 1e-12);
     }
-    let boxes = [(-1.0, 3.0, -0.5, 1.5, 0.5, 20.0), (2.0, 4.5, 1.0, 2.0, -3.0, 8.0)];
+    let boxes = [
+        (-1.0, 3.0, -0.5, 1.5, 0.5, 20.0),
+        (2.0, 4.5, 1.0, 2.0, -3.0, 8.0),
+    ];
     for (l, r, b, t, n, f) in boxes {
         let label = format!("glOrtho({l}, {r}, {b}, {t}, {n}, {f})");
         let m = gl_ortho(l, r, b, t, n, f);
         let cam = Camera::from_matrices(view, m, vp).unwrap();
-        assert_eq!(cam.projection, Projection::Orthographic { height: t - b }, "{label}");
+        assert_eq!(
+            cam.projection,
+            Projection::Orthographic { height: t - b },
+            "{label}"
+        );
         assert!((cam.near - n).abs() < 1e-12 * f && (cam.far - f).abs() < 1e-9 * f);
         assert_close(cam.projection_matrix(vp.aspect()), m, &label);
         let (wl, wr, wb, wt) = cam.window(vp.aspect());
         for (got, want) in [(wl, l), (wr, r), (wb, b), (wt, t)] {
-            assert!((got - want).abs() < 1e-12, "{label}: window {:?}", cam.window(vp.aspect()));
+            assert!(
+                (got - want).abs() < 1e-12,
+                "{label}: window {:?}",
+                cam.window(vp.aspect())
+            );
         }
         // The ray through the bottom-right corner starts at (r, b, 0) in eye space.
         let ray = cam.ray(vp, 160.0, 90.0);
@@ -387,8 +459,8 @@ fn asymmetric_gl_frustum_and_gl_ortho_matrices_come_back_unchanged() {
 #[test]
 fn skewed_and_oblique_projections_are_refused_saying_why() {
     let vp = Viewport::new(64, 48).unwrap();
-    let view = Camera::perspective(DVec3::Z * 4.0, DVec3::ZERO, DVec3::Y, 50.0, 0.5, 20.0)
-        .view_matrix();
+    let view =
+        Camera::perspective(DVec3::Z * 4.0, DVec3::ZERO, DVec3::Y, 50.0, 0.5, 20.0).view_matrix();
     let err = |p: DMat4| match Camera::from_matrices(view, p, vp) {
         Err(Error::InvalidCamera(m)) => m,
         other => panic!("expected InvalidCamera, got {other:?}"),
@@ -410,10 +482,18 @@ fn skewed_and_oblique_projections_are_refused_saying_why() {
     }
     let mut moving = frustum;
     moving.w_axis.x = 0.1;
-    assert!(err(moving).contains("the window moves with depth"), "{}", err(moving));
+    assert!(
+        err(moving).contains("the window moves with depth"),
+        "{}",
+        err(moving)
+    );
     let mut oblique = ortho;
     oblique.z_axis.y = 0.1;
-    assert!(err(oblique).contains("an oblique projection"), "{}", err(oblique));
+    assert!(
+        err(oblique).contains("an oblique projection"),
+        "{}",
+        err(oblique)
+    );
 }
 
 #[test]
@@ -437,7 +517,10 @@ fn lenses_that_are_no_camera_are_refused_saying_why() {
     assert!(err(with(DVec2::ZERO, f64::INFINITY)).contains("positive and finite"));
     // A window 1e9 widths off the axis: its pixels span 1e-20 radians there.
     let far_off = err(with(DVec2::new(1e9, 0.0), 1.0));
-    assert!(far_off.contains("a pixel at the window's edge spans"), "{far_off}");
+    assert!(
+        far_off.contains("a pixel at the window's edge spans"),
+        "{far_off}"
+    );
     // An orthographic window beyond the largest coordinate.
     let ortho = Camera {
         projection: Projection::Orthographic { height: 2.0 },
@@ -447,11 +530,20 @@ fn lenses_that_are_no_camera_are_refused_saying_why() {
         },
         ..base
     };
-    assert!(err(ortho).contains("beyond the largest accepted"), "{}", err(ortho));
+    assert!(
+        err(ortho).contains("beyond the largest accepted"),
+        "{}",
+        err(ortho)
+    );
     // The pipeline refuses them the same way.
     let scene = Scene::demo("default").unwrap();
     assert!(matches!(
-        prepare(&scene, &with(DVec2::new(1e9, 0.0), 1.0), vp, &PrepareOptions::default()),
+        prepare(
+            &scene,
+            &with(DVec2::new(1e9, 0.0), 1.0),
+            vp,
+            &PrepareOptions::default()
+        ),
         Err(Error::InvalidCamera(_))
     ));
 }
@@ -461,7 +553,14 @@ fn a_tile_camera_renders_its_tile_of_the_whole_picture() {
     // Four tiles of a 2 x 2 split of one view, each rendered by the same camera with
     // half the field of view and a quarter-picture shift, make up the whole picture.
     let scene = layered_triangles(13, 24);
-    let whole = Camera::perspective(DVec3::new(0.1, 0.2, 4.0), DVec3::ZERO, DVec3::Y, 50.0, 0.5, 20.0);
+    let whole = Camera::perspective(
+        DVec3::new(0.1, 0.2, 4.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        50.0,
+        0.5,
+        20.0,
+    );
     let (w, h) = (40u32, 30u32);
     let vp = Viewport::new(u64::from(2 * w), u64::from(2 * h)).unwrap();
     let tile_vp = Viewport::new(u64::from(w), u64::from(h)).unwrap();
@@ -482,7 +581,17 @@ fn a_tile_camera_renders_its_tile_of_the_whole_picture() {
             ..whole
         };
         let f = frame(&scene, &tile, tile_vp, Algorithm::ZBuffer);
-        assert_part_of(&f, &reference, tx * w, ty * h, &format!("tile ({tx}, {ty})"));
+        assert_part_of(
+            &f,
+            &reference,
+            tx * w,
+            ty * h,
+            &format!("tile ({tx}, {ty})"),
+        );
     }
-    assert!(reference.covered_pixels() > 1000, "{}", reference.covered_pixels());
+    assert!(
+        reference.covered_pixels() > 1000,
+        "{}",
+        reference.covered_pixels()
+    );
 }

@@ -336,8 +336,7 @@ impl Camera {
             ));
         }
         let lens = &self.lens;
-        if !(lens.shift.is_finite() && lens.pixel_aspect.is_finite() && lens.pixel_aspect > 0.0)
-        {
+        if !(lens.shift.is_finite() && lens.pixel_aspect.is_finite() && lens.pixel_aspect > 0.0) {
             return bad(format!(
                 "lens shift {:?} must be finite and pixel aspect {:e} positive and finite",
                 lens.shift.to_array(),
@@ -548,7 +547,12 @@ impl Camera {
     pub fn window(&self, aspect: f64) -> (f64, f64, f64, f64) {
         let (hw, hh) = self.half_extents(aspect);
         let c = self.lens.ndc_centre();
-        ((c.x - 1.0) * hw, (c.x + 1.0) * hw, (c.y - 1.0) * hh, (c.y + 1.0) * hh)
+        (
+            (c.x - 1.0) * hw,
+            (c.x + 1.0) * hw,
+            (c.y - 1.0) * hh,
+            (c.y + 1.0) * hh,
+        )
     }
 
     /// Eye to clip space for `aspect = width / height`: `gluPerspective` or `glOrtho`

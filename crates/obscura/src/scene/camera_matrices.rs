@@ -82,8 +82,16 @@ impl Intrinsics {
         let off = SHAPE_TOLERANCE * mx.max(my);
         let centred = |c: f64, m: f64| (c - m).abs() <= off;
         let shift = DVec2::new(
-            if centred(self.cx, mx) { 0.0 } else { (mx - self.cx) / w },
-            if centred(self.cy, my) { 0.0 } else { (self.cy - my) / h },
+            if centred(self.cx, mx) {
+                0.0
+            } else {
+                (mx - self.cx) / w
+            },
+            if centred(self.cy, my) {
+                0.0
+            } else {
+                (self.cy - my) / h
+            },
         );
         let pixel_aspect = if ((self.fx - self.fy) / self.fy).abs() <= SHAPE_TOLERANCE {
             1.0
