@@ -145,10 +145,12 @@ fn a_shifted_principal_point_shows_part_of_a_larger_centred_picture() {
             clearance > 1e-4,
             "({dx}, {dy}): an edge {clearance:e} px from a pixel centre"
         );
+        // The octree casts the same rays through its voxels: its pictures too.
         for algorithm in [
             Algorithm::ZBuffer,
             Algorithm::Raycast,
             Algorithm::RaycastBvh,
+            Algorithm::Octree,
         ] {
             let big = frame(&scene, &big_cam, big_vp, algorithm);
             let small = frame(&scene, &cam, vp, algorithm);
