@@ -1603,6 +1603,32 @@ fn toml_orthographic_camera_with_fitted_range() {
 }
 
 #[test]
+fn toml_camera_with_a_lens() {
+    let dir = TempDir::new("toml-lens");
+    let p = dir.write(
+        "lens.toml",
+        "[camera]\neye = [0, 0, 10]\ntarget = [0, 0, 0]\nshift = [0.125, -0.25]\n\
+         pixel_aspect = 1.5\n\n[[object]]\nprimitive = \"box\"\n",
+    );
+    let c = *load(&p).camera().unwrap();
+    assert_eq!(c.lens.shift, glam::DVec2::new(0.125, -0.25));
+    assert_eq!(c.lens.pixel_aspect, 1.5);
+    // Without the keys, the centred lens.
+    let p = dir.write(
+        "centred.toml",
+        "[camera]\neye = [0, 0, 10]\ntarget = [0, 0, 0]\n\n[[object]]\nprimitive = \"box\"\n",
+    );
+    assert_eq!(load(&p).camera().unwrap().lens, obscura::Lens::CENTRED);
+    // A bad lens is refused at the camera's line.
+    let p = dir.write(
+        "bad.toml",
+        "[[object]]\nprimitive = \"box\"\n\n[camera]\neye = [0, 0, 10]\ntarget = [0, 0, 0]\n\
+         pixel_aspect = -1\n",
+    );
+    assert_at_line(&load_err(&p), &p, 4, "pixel aspect -1e0 positive");
+}
+
+#[test]
 fn toml_errors_name_the_line() {
     let dir = TempDir::new("toml-errors");
     let obj = "[[object]]\nprimitive = \"box\"\n";

@@ -84,6 +84,10 @@ struct CameraSpec {
     ortho_height: Option<f64>,
     near: Option<f64>,
     far: Option<f64>,
+    /// The lens's shift of the image window, in units of its width and height.
+    shift: Option<[f64; 2]>,
+    /// The pixels' width over their height.
+    pixel_aspect: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -741,7 +745,10 @@ impl SceneReader<'_, '_> {
             projection,
             near: 1.0,
             far: 2.0,
-            lens: crate::scene::Lens::CENTRED,
+            lens: crate::scene::Lens {
+                shift: c.shift.map_or(glam::DVec2::ZERO, glam::DVec2::from_array),
+                pixel_aspect: c.pixel_aspect.unwrap_or(1.0),
+            },
         };
         camera.fit_depth_range(&scene.bounds());
         if let Some(n) = c.near {
