@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use obscura::scene::{MeshBuilder, ObjectDesc, random::scaled_triangles};
+use obscura::bench_support::scaled_triangles;
+use obscura::scene::{MeshBuilder, ObjectDesc};
 use obscura::surface::Algorithm;
 use obscura::{Result, Scene, SceneIndex, prepare};
 use serde_json::json;

@@ -164,8 +164,10 @@ impl Kernel {
 }
 
 /// The environment variable that turns a skipped SIMD comparison into a failure.
+#[cfg(test)]
 pub const REQUIRE_SIMD_VAR: &str = "OBSCURA_REQUIRE_SIMD";
 
+#[cfg(test)]
 /// For tests: reports that the comparison `what` of a vector kernel with its portable
 /// twin was skipped because this processor lacks `kernel`'s instructions.
 ///

@@ -14,9 +14,7 @@ mod camera_matrices;
 pub mod demo;
 pub mod load;
 mod mesh;
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod random;
+pub(crate) mod random;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -36,14 +36,10 @@
 //!   triangles.
 
 mod build;
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod packet;
+pub(crate) mod packet;
 mod packet_lanes;
 mod ray_packet;
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod traverse;
+pub(crate) mod traverse;
 
 use std::time::Instant;
 
