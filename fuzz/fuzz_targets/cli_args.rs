@@ -1,6 +1,6 @@
 //! The command line's argument parsing and output checks, without a library crate for
-//! the CLI: its modules are compiled here from their source files (`#[path]`), and the
-//! `Cli` of `main.rs` is repeated below (keep it in step).
+//! the CLI: its modules, `Cli` (`cli.rs`) among them, are compiled here from their
+//! source files (`#[path]`).
 //!
 //! The fuzzed bytes are the arguments after `obscura`, separated by NUL bytes (or, when
 //! the input holds none, by new lines; one at the end is dropped). Each argument list is
@@ -17,6 +17,8 @@
 
 #[path = "../../crates/obscura-cli/src/bench.rs"]
 mod bench;
+#[path = "../../crates/obscura-cli/src/cli.rs"]
+mod cli;
 #[path = "../../crates/obscura-cli/src/common.rs"]
 mod common;
 #[path = "../../crates/obscura-cli/src/compare.rs"]
@@ -33,28 +35,11 @@ mod render;
 use std::path::{Component, Path, PathBuf};
 use std::sync::OnceLock;
 
-use clap::{Parser, Subcommand};
+use clap::Parser;
 use libfuzzer_sys::fuzz_target;
 
+use crate::cli::{Cli, Command};
 use crate::out::errln;
-
-/// `main.rs`'s command line.
-#[derive(Parser, Debug)]
-#[command(name = "obscura", version, about, long_about = None)]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand, Debug)]
-enum Command {
-    #[command(after_help = render::EXAMPLES)]
-    Render(render::RenderArgs),
-    #[command(after_help = compare::EXAMPLES)]
-    Compare(compare::CompareArgs),
-    #[command(after_help = bench::EXAMPLES)]
-    Bench(bench::BenchArgs),
-}
 
 /// The fixed files of the working folder and their bytes.
 static FILES: OnceLock<Vec<(PathBuf, Vec<u8>)>> = OnceLock::new();

@@ -173,6 +173,18 @@ impl Object {
             .collect()
     }
 
+    /// Replaces `out` with the world-space position of every vertex of the mesh, in
+    /// mesh order (each computed as [`Self::world_polygon`] computes it).
+    pub(crate) fn world_positions_into(&self, out: &mut Vec<DVec3>) {
+        out.clear();
+        out.extend(
+            self.mesh
+                .positions()
+                .iter()
+                .map(|&p| self.transform.transform_point3(p)),
+        );
+    }
+
     /// Colour of a local face: its material's, else the object's.
     #[must_use]
     pub fn face_color(&self, face: u32) -> [f32; 3] {
