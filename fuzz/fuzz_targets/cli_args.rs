@@ -158,7 +158,7 @@ fuzz_target!(|data: &[u8]| {
             return;
         }
     };
-    let (scene, outs): (Option<&str>, Vec<(&'static str, Option<&Path>)>) = match &cli.command {
+    let (scene, outs, naming): (Option<&str>, Vec<(&'static str, Option<&Path>)>, _) = match &cli.command {
         Command::Render(a) => (
             a.view.scene.as_deref(),
             vec![
@@ -167,6 +167,7 @@ fuzz_target!(|data: &[u8]| {
                 ("--depth", a.depth.as_deref()),
                 ("--stats-json", a.stats_json.as_deref()),
             ],
+            a.naming,
         ),
         Command::Compare(a) => (
             a.view.scene.as_deref(),
@@ -174,15 +175,20 @@ fuzz_target!(|data: &[u8]| {
                 ("-o", Some(a.output.as_path())),
                 ("--json", a.json.as_deref()),
             ],
+            a.naming,
         ),
-        Command::Bench(a) => (a.view.scene.as_deref(), vec![("--json", a.json.as_deref())]),
+        Command::Bench(a) => (
+            a.view.scene.as_deref(),
+            vec![("--json", a.json.as_deref())],
+            a.naming,
+        ),
     };
     let paths_inside = outs.iter().all(|(_, p)| p.is_none_or(inside))
         && scene.is_none_or(|s| s.starts_with("demo:") || inside(Path::new(s)));
     if !paths_inside {
         return;
     }
-    drop(outputs::Outputs::stage(scene, &outs));
+    drop(outputs::Outputs::stage(scene, &outs, naming));
     let run = match cli.command {
         Command::Render(mut a) => {
             let depth = a.tuning.octree_depth;

@@ -238,6 +238,7 @@ mod tests {
             include_str!("surface/image/resolve.rs"),
         ),
         ("view/passes.rs", include_str!("view/passes.rs")),
+        ("bench_support.rs", include_str!("bench_support.rs")),
         (
             "benches/zbuffer_bounds.rs",
             include_str!("../benches/zbuffer_bounds.rs"),

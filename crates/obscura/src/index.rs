@@ -55,13 +55,13 @@
 //! nearest hit of the watertight test (lowest face id at equal distance) whichever
 //! cells it walks, and a ray from an origin the cells were not grown for is traced
 //! against every triangle, so frames are bit for bit the same from any grid. The index
-//! therefore keeps one grid per grid options and budget, built for origins up to
-//! [`GRID_HEADROOM`] times the scene's largest coordinate (or the view's eye, if
-//! farther): growing cells for that costs nothing measurable (`τ` stays below `10^-10`
-//! of the scene's size), and one grid serves every view from within a thousand scene
-//! sizes. A view from farther (whose rays the kept grid would send to the every-triangle
-//! path) replaces the grid with one built for its eye, which serves every nearer eye
-//! too.
+//! therefore keeps one grid per grid options and budget, built for origins up to the
+//! scene's largest coordinate plus [`GRID_HEADROOM`] times its extent (or the view's
+//! eye, if farther): for a scene about the origin growing cells for that costs nothing
+//! measurable (`τ` stays below `10^-10` of the scene's size), and one grid serves
+//! every view from within a thousand scene sizes. A view from farther (whose rays the
+//! kept grid would send to the every-triangle path) replaces the grid with one built
+//! for its eye, which serves every nearer eye too.
 //!
 //! # Limitations
 //! The index borrows its scene; a scene changed after indexing needs a new index.
@@ -86,8 +86,9 @@ use crate::{Error, Frame, Result};
 /// different options.
 pub const KEPT_PER_STRUCTURE: usize = 4;
 
-/// The ray origins an index's grid is built for, in multiples of the scene's largest
-/// coordinate (see "One grid for every eye" in the [module documentation](self)).
+/// How far from the scene (in multiples of its extent) the ray origins an index's grid
+/// is built for may lie (see "One grid for every eye" in the
+/// [module documentation](self)).
 pub const GRID_HEADROOM: f64 = 1024.0;
 
 /// How many times an index built each structure (each kept one counts once; a build
@@ -303,7 +304,7 @@ impl<'s> SceneIndex<'s> {
     /// `budget` the first time (see [`UniformGrid::build_until`]), stopped by
     /// `deadline` (see [`crate::work`]; a stopped build is not kept). One grid is kept
     /// for every [`GridOptions::ray_origins`]: it is built for origins up to
-    /// [`GRID_HEADROOM`] times the scene's largest coordinate, and rebuilt only for
+    /// [`GRID_HEADROOM`] scene extents away from the scene, and rebuilt only for
     /// origins farther than it serves (see "One grid for every eye" in the
     /// [module documentation](self)).
     pub fn grid(
@@ -321,8 +322,9 @@ impl<'s> SceneIndex<'s> {
             (key, budget.limit()),
             |kept| kept.serves_origins(origins),
             || {
-                let scene = self.triangles().bounds().magnitude();
-                let built_for = key.with_ray_origins(origins.max(GRID_HEADROOM * scene));
+                let b = self.triangles().bounds();
+                let reach = b.magnitude() + GRID_HEADROOM * b.extent().max_element();
+                let built_for = key.with_ray_origins(origins.max(reach));
                 let g = UniformGrid::build_until(self.triangles(), &built_for, budget, deadline)?;
                 self.counters.grid.fetch_add(1, Ordering::Relaxed);
                 Ok(g)
@@ -533,11 +535,12 @@ mod tests {
         assert_eq!((b.triangles, b.bvh, b.bsp), (1, 1, 1));
     }
 
-    /// A view of the scene, framed, from `distance` scene sizes (its largest
-    /// coordinate) away from its centre.
+    /// A view of the scene, framed, from `distance` scene sizes (its largest extent)
+    /// away from its centre.
     fn view_from(scene: &Scene, distance: f64) -> View<'_> {
         let vp = Viewport::new(32, 24).unwrap();
-        let (centre, size) = (scene.bounds().center(), scene.bounds().magnitude());
+        let b = scene.bounds();
+        let (centre, size) = (b.center(), b.extent().max_element());
         let eye = centre + DVec3::new(0.6, 0.4, 1.0).normalize() * distance * size;
         let fov = (2.0 * (1.2 / distance).atan()).to_degrees();
         let (near, far) = (size * distance * 0.2, size * distance * 2.0);
