@@ -98,7 +98,7 @@ pub enum Kernel {
     Portable,
     /// The portable code compiled for x86-64 with AVX2 (the compiler vectorizes it).
     Avx2,
-    /// AVX-512 F, VL, BW and DQ ([`Avx512`]): the hand-written lanes of the
+    /// AVX-512 F, VL, BW and DQ (the crate's `Avx512` token): the hand-written lanes of the
     /// rasterizer and of the BVH's packets; code without such lanes (single rays) runs
     /// its AVX2 build.
     Avx512,
@@ -239,10 +239,6 @@ mod tests {
         ),
         ("view/passes.rs", include_str!("view/passes.rs")),
         ("bench_support.rs", include_str!("bench_support.rs")),
-        (
-            "benches/zbuffer_bounds.rs",
-            include_str!("../benches/zbuffer_bounds.rs"),
-        ),
     ];
 
     /// Every `#[target_feature(enable = "...")]` in `src`: its features, and the

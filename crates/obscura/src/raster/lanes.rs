@@ -40,7 +40,7 @@ pub fn key_of(z: f64) -> f32 {
     if MIN_KEY > k { MIN_KEY } else { k }
 }
 
-/// How the converted depths are computed from keys (see [`Lanes::resolve`]).
+/// How the converted depths are computed from keys (by the rasterizer's lanes, `Lanes::resolve`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum DepthOfKey {
     /// Perspective: `depth = near / key`, in `f32` (within one unit in the last place
@@ -60,7 +60,7 @@ pub enum DepthOfKey {
 }
 
 impl DepthOfKey {
-    /// The depth of one key (what every implementation of [`Lanes::resolve`] computes).
+    /// The depth of one key (what every implementation of `Lanes::resolve` computes).
     #[inline(always)]
     #[must_use]
     pub fn depth(self, key: f32) -> f32 {
