@@ -96,7 +96,6 @@ fn a_scene_from_arrays_renders_as_the_same_mesh_loaded_from_obj() {
     let path = dir.join("same.obj");
     std::fs::write(&path, obj).unwrap();
     let loaded = Scene::load(&path).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
 
     assert_eq!(scene.face_count(), 9);
     assert_eq!(loaded.face_count(), 9);
@@ -352,5 +351,4 @@ fn formats_left_out_of_the_build_name_their_feature() {
             assert!(m.contains(name), "{m}");
         }
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
