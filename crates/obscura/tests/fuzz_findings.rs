@@ -14,7 +14,7 @@
     feature = "toml-scene"
 ))]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 mod common;
 

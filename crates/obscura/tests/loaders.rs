@@ -10,7 +10,7 @@
     feature = "toml-scene"
 ))]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 mod common;

@@ -6,7 +6,7 @@
 //! the object, or the file, line and entry.
 
 #[cfg(all(feature = "obj", feature = "toml-scene"))]
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 mod common;
 
