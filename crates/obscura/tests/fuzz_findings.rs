@@ -94,6 +94,6 @@ fn a_mesh_near_the_coordinate_limit_is_framed_or_refused_by_name() {
         stl.extend_from_slice(&v.to_le_bytes());
     }
     stl.extend_from_slice(&[0, 0]);
-    let path = dir.write("far_binary.stl", &stl);
+    let path = dir.write("far_binary.stl", stl);
     load_or_refuse(&path);
 }

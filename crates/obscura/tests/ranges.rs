@@ -202,7 +202,7 @@ fn toml_scales_out_of_range_name_the_scale_and_its_line() {
     ] {
         let p = t.write(
             "s.toml",
-            &format!("# a box\n[[object]]\nprimitive = \"box\"\nsize = [1, 1, 1]\nscale = {v}\n"),
+            format!("# a box\n[[object]]\nprimitive = \"box\"\nsize = [1, 1, 1]\nscale = {v}\n"),
         );
         let e = load_err(&p);
         assert!(
@@ -252,7 +252,7 @@ fn a_bad_matrix_entry_is_named_with_its_line() {
             .collect();
         let p = t.write(
             "m.toml",
-            &format!(
+            format!(
                 "[[object]]\nprimitive = \"box\"\nsize = [1, 1, 1]\nmatrix = [\n{}]\n",
                 body.concat()
             ),
