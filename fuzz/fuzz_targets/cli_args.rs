@@ -1,6 +1,6 @@
 //! The command line's argument parsing and output checks, without a library crate for
-//! the CLI: its modules are compiled here from their source files (`#[path]`), and the
-//! `Cli` of `main.rs` is repeated below (keep it in step).
+//! the CLI: its modules, `Cli` (`cli.rs`) among them, are compiled here from their
+//! source files (`#[path]`).
 //!
 //! The fuzzed bytes are the arguments after `obscura`, separated by NUL bytes (or, when
 //! the input holds none, by new lines; one at the end is dropped). Each argument list is
@@ -17,6 +17,8 @@
 
 #[path = "../../crates/obscura-cli/src/bench.rs"]
 mod bench;
+#[path = "../../crates/obscura-cli/src/cli.rs"]
+mod cli;
 #[path = "../../crates/obscura-cli/src/common.rs"]
 mod common;
 #[path = "../../crates/obscura-cli/src/compare.rs"]
@@ -33,28 +35,11 @@ mod render;
 use std::path::{Component, Path, PathBuf};
 use std::sync::OnceLock;
 
-use clap::{Parser, Subcommand};
+use clap::Parser;
 use libfuzzer_sys::fuzz_target;
 
+use crate::cli::{Cli, Command};
 use crate::out::errln;
-
-/// `main.rs`'s command line.
-#[derive(Parser, Debug)]
-#[command(name = "obscura", version, about, long_about = None)]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand, Debug)]
-enum Command {
-    #[command(after_help = render::EXAMPLES)]
-    Render(render::RenderArgs),
-    #[command(after_help = compare::EXAMPLES)]
-    Compare(compare::CompareArgs),
-    #[command(after_help = bench::EXAMPLES)]
-    Bench(bench::BenchArgs),
-}
 
 /// The fixed files of the working folder and their bytes.
 static FILES: OnceLock<Vec<(PathBuf, Vec<u8>)>> = OnceLock::new();
@@ -173,7 +158,7 @@ fuzz_target!(|data: &[u8]| {
             return;
         }
     };
-    let (scene, outs): (Option<&str>, Vec<(&'static str, Option<&Path>)>) = match &cli.command {
+    let (scene, outs, naming): (Option<&str>, Vec<(&'static str, Option<&Path>)>, _) = match &cli.command {
         Command::Render(a) => (
             a.view.scene.as_deref(),
             vec![
@@ -182,6 +167,7 @@ fuzz_target!(|data: &[u8]| {
                 ("--depth", a.depth.as_deref()),
                 ("--stats-json", a.stats_json.as_deref()),
             ],
+            a.naming,
         ),
         Command::Compare(a) => (
             a.view.scene.as_deref(),
@@ -189,15 +175,20 @@ fuzz_target!(|data: &[u8]| {
                 ("-o", Some(a.output.as_path())),
                 ("--json", a.json.as_deref()),
             ],
+            a.naming,
         ),
-        Command::Bench(a) => (a.view.scene.as_deref(), vec![("--json", a.json.as_deref())]),
+        Command::Bench(a) => (
+            a.view.scene.as_deref(),
+            vec![("--json", a.json.as_deref())],
+            a.naming,
+        ),
     };
     let paths_inside = outs.iter().all(|(_, p)| p.is_none_or(inside))
         && scene.is_none_or(|s| s.starts_with("demo:") || inside(Path::new(s)));
     if !paths_inside {
         return;
     }
-    drop(outputs::Outputs::stage(scene, &outs));
+    drop(outputs::Outputs::stage(scene, &outs, naming));
     let run = match cli.command {
         Command::Render(mut a) => {
             let depth = a.tuning.octree_depth;

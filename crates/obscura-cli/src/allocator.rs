@@ -396,35 +396,16 @@ unsafe fn remap(_ptr: *mut u8, _old: usize, _new: usize) -> *mut u8 {
     unreachable!("is_mapped is false off Linux")
 }
 
+/// The library's huge-page probes, shared with its `memory` tests.
+#[cfg(test)]
+#[path = "../../obscura/src/memory/probe.rs"]
+mod probe;
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Whether this system backs advised ranges with huge pages (as the library's
-    /// `memory` tests ask).
-    fn huge_pages_enabled() -> bool {
-        std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled")
-            .is_ok_and(|s| s.contains("[madvise]") || s.contains("[always]"))
-    }
-
-    /// `AnonHugePages` of the mapping holding `addr`, in KiB, from `/proc/self/smaps`.
-    fn anon_huge_kib(addr: usize) -> Option<u64> {
-        let text = std::fs::read_to_string("/proc/self/smaps").ok()?;
-        let mut inside = false;
-        for line in text.lines() {
-            let first = line.split_whitespace().next().unwrap_or("");
-            if let Some((a, b)) = first.split_once('-')
-                && let (Ok(a), Ok(b)) = (usize::from_str_radix(a, 16), usize::from_str_radix(b, 16))
-            {
-                inside = a <= addr && addr < b;
-                continue;
-            }
-            if inside && let Some(rest) = line.strip_prefix("AnonHugePages:") {
-                return rest.trim().trim_end_matches("kB").trim().parse().ok();
-            }
-        }
-        None
-    }
+    use super::probe::{anon_huge_kib, huge_pages_enabled};
 
     /// A pattern value for byte `i`.
     fn pattern(i: usize) -> u8 {

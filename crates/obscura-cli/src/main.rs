@@ -2,6 +2,7 @@
 
 mod allocator;
 mod bench;
+mod cli;
 mod common;
 mod compare;
 mod grid;
@@ -11,37 +12,15 @@ mod render;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::Parser;
 
+use crate::cli::{Cli, Command};
 use crate::out::errln;
 
 /// Large buffers (the loaded scene, the prepared view, the frame) in whole huge pages:
 /// a one-shot run otherwise spends milliseconds on page faults at their ends.
 #[global_allocator]
 static ALLOCATOR: allocator::HugePageAllocator = allocator::HugePageAllocator::new();
-
-/// What can be seen? Clipping, culling and hidden-surface removal, every classical
-/// algorithm behind one interface.
-#[derive(Parser, Debug)]
-#[command(name = "obscura", version, about, long_about = None)]
-struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
-
-#[derive(Subcommand, Debug)]
-enum Command {
-    /// Render a scene to a PNG (and optionally face ids and depths as NumPy arrays).
-    #[command(after_help = render::EXAMPLES)]
-    Render(render::RenderArgs),
-    /// Render with every algorithm (or a list), compare each to the z-buffer, and write a
-    /// grid of pictures and difference masks.
-    #[command(after_help = compare::EXAMPLES)]
-    Compare(compare::CompareArgs),
-    /// Time each algorithm over a sweep of face counts and fit the growth exponent.
-    #[command(after_help = bench::EXAMPLES)]
-    Bench(bench::BenchArgs),
-}
 
 fn main() -> ExitCode {
     common::mark_start();

@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
-use obscura::surface::{Algorithm, render};
-use obscura::{Result, prepare};
+use obscura::surface::Algorithm;
+use obscura::{Result, SceneIndex, prepare};
 use serde_json::json;
 
 use crate::common::{AlgoArgs, ViewArgs};
@@ -107,8 +107,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let start = Instant::now();
         let view = prepare(scene, &camera, viewport, &prep)?;
         let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
-        let (frame, stats) =
-            render(args.algo, &view, &options).map_err(|e| e.in_input(&loaded.spec))?;
+        // The scene's structures through its index, as `compare` and `bench` take them
+        // (one render here, so each is built once either way).
+        let index = SceneIndex::new(scene);
+        let (frame, stats) = index
+            .render(&view, args.algo, &options)
+            .map_err(|e| e.in_input(&loaded.spec))?;
         let render_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok::<_, obscura::Error>((view.stats().clone(), frame, stats, render_ms, prepare_ms))
     })?;

@@ -4,7 +4,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
 use obscura::accel::bsp::{BspOptions, BspTraversal, BspTree};
-use obscura::rng::SplitMix64;
+use obscura::bench_support::SplitMix64;
 use obscura::scene::demo;
 use obscura::scene::{MeshBuilder, ObjectDesc, Scene};
 use obscura::surface::{RenderOptions, bsp};

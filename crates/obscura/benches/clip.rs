@@ -12,10 +12,10 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::{DVec2, DVec3, DVec4};
+use obscura::bench_support::SplitMix64;
 use obscura::clip::sutherland_hodgman as sh;
 use obscura::clip::{ConvexWindow, Rect, cohen_sutherland as cs, liang_barsky as lb, region_codes};
 use obscura::geom::Aabb;
-use obscura::rng::SplitMix64;
 
 const BATCH: usize = 1024;
 const MIXES: [&str; 3] = ["inside", "crossing", "outside"];

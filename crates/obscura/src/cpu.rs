@@ -98,7 +98,7 @@ pub enum Kernel {
     Portable,
     /// The portable code compiled for x86-64 with AVX2 (the compiler vectorizes it).
     Avx2,
-    /// AVX-512 F, VL, BW and DQ ([`Avx512`]): the hand-written lanes of the
+    /// AVX-512 F, VL, BW and DQ (the crate's `Avx512` token): the hand-written lanes of the
     /// rasterizer and of the BVH's packets; code without such lanes (single rays) runs
     /// its AVX2 build.
     Avx512,
@@ -164,8 +164,10 @@ impl Kernel {
 }
 
 /// The environment variable that turns a skipped SIMD comparison into a failure.
+#[cfg(test)]
 pub const REQUIRE_SIMD_VAR: &str = "OBSCURA_REQUIRE_SIMD";
 
+#[cfg(test)]
 /// For tests: reports that the comparison `what` of a vector kernel with its portable
 /// twin was skipped because this processor lacks `kernel`'s instructions.
 ///
@@ -236,10 +238,7 @@ mod tests {
             include_str!("surface/image/resolve.rs"),
         ),
         ("view/passes.rs", include_str!("view/passes.rs")),
-        (
-            "benches/zbuffer_bounds.rs",
-            include_str!("../benches/zbuffer_bounds.rs"),
-        ),
+        ("bench_support.rs", include_str!("bench_support.rs")),
     ];
 
     /// Every `#[target_feature(enable = "...")]` in `src`: its features, and the

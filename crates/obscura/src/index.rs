@@ -33,7 +33,7 @@
 //!
 //! # Options and budgets
 //! A structure whose build depends on options is kept per options: grids by their
-//! [`GridOptions`] (which hold the magnitude of the view's ray origins) and memory
+//! [`GridOptions`] (less the magnitude of the ray origins, see below) and memory
 //! budget, BSP trees by their [`BspOptions`] (with the budget they carry), octrees by
 //! depth and budget. At most [`KEPT_PER_STRUCTURE`] of each are kept, the oldest
 //! dropped first. Memory budgets ([`crate::budget`]) apply to every build as they did
@@ -48,10 +48,23 @@
 //! for the same octree at once may each build it, and the first kept is the one
 //! returned to both afterwards.
 //!
+//! # One grid for every eye
+//! A grid's cells are grown for the rounding of the rays it will trace, which grows
+//! with the magnitude of their origins ([`GridOptions::ray_origins`], see "Rounding" in
+//! [`crate::accel::grid`]). Its answer does not depend on the cells: a ray takes the
+//! nearest hit of the watertight test (lowest face id at equal distance) whichever
+//! cells it walks, and a ray from an origin the cells were not grown for is traced
+//! against every triangle, so frames are bit for bit the same from any grid. The index
+//! therefore keeps one grid per grid options and budget, built for origins up to the
+//! scene's largest coordinate plus [`GRID_HEADROOM`] times its extent (or the view's
+//! eye, if farther): for a scene about the origin growing cells for that costs nothing
+//! measurable (`τ` stays below `10^-10` of the scene's size), and one grid serves
+//! every view from within a thousand scene sizes. A view from farther (whose rays the
+//! kept grid would send to the every-triangle path) replaces the grid with one built
+//! for its eye, which serves every nearer eye too.
+//!
 //! # Limitations
 //! The index borrows its scene; a scene changed after indexing needs a new index.
-//! Grids depend on the ray origins of a view (see [`crate::accel::grid`]): views from
-//! eyes at other distances from the origin get grids of their own.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
@@ -72,6 +85,11 @@ use crate::{Error, Frame, Result};
 /// The most structures of one kind (grids, BSP trees, octrees) an index keeps for
 /// different options.
 pub const KEPT_PER_STRUCTURE: usize = 4;
+
+/// How far from the scene (in multiples of its extent) the ray origins an index's grid
+/// is built for may lie (see "One grid for every eye" in the
+/// [module documentation](self)).
+pub const GRID_HEADROOM: f64 = 1024.0;
 
 /// How many times an index built each structure (each kept one counts once; a build
 /// refused by its budget does not count).
@@ -141,9 +159,20 @@ impl<K: PartialEq, T> Keyed<K, T> {
     /// The structure of `key`, built by `build` under the slot's lock if not kept yet
     /// (other threads asking for the same key wait). An error is returned, not kept.
     fn get_or_build(&self, key: K, build: impl FnOnce() -> Result<T>) -> Result<Arc<T>> {
+        self.get_or_replace(key, |_| true, build)
+    }
+
+    /// As [`Self::get_or_build`], with a kept structure that does not `serve` the
+    /// caller replaced by a new build (an error keeps the old one).
+    fn get_or_replace(
+        &self,
+        key: K,
+        serves: impl FnOnce(&T) -> bool,
+        build: impl FnOnce() -> Result<T>,
+    ) -> Result<Arc<T>> {
         let slot = self.slot(key);
         let mut held = lock(&slot);
-        if let Some(t) = held.as_ref() {
+        if let Some(t) = held.as_ref().filter(|t| serves(t)) {
             return Ok(Arc::clone(t));
         }
         let t = Arc::new(build()?);
@@ -272,19 +301,35 @@ impl<'s> SceneIndex<'s> {
     }
 
     /// The uniform grid over [`Self::triangles`] for these options, built under
-    /// `budget` the first time (see [`UniformGrid::build_with_budget`]), stopped by
-    /// `deadline` (see [`crate::work`]; a stopped build is not kept).
+    /// `budget` the first time (see [`UniformGrid::build_until`]), stopped by
+    /// `deadline` (see [`crate::work`]; a stopped build is not kept). One grid is kept
+    /// for every [`GridOptions::ray_origins`]: it is built for origins up to
+    /// [`GRID_HEADROOM`] scene extents away from the scene, and rebuilt only for
+    /// origins farther than it serves (see "One grid for every eye" in the
+    /// [module documentation](self)).
     pub fn grid(
         &self,
         options: &GridOptions,
         budget: &MemoryBudget,
         deadline: &crate::work::Deadline,
     ) -> Result<Arc<UniformGrid>> {
-        self.grids.get_or_build((*options, budget.limit()), || {
-            let g = UniformGrid::build_until(self.triangles(), options, budget, deadline)?;
-            self.counters.grid.fetch_add(1, Ordering::Relaxed);
-            Ok(g)
-        })
+        let origins = options.ray_origins.abs();
+        let key = GridOptions {
+            ray_origins: 0.0,
+            ..*options
+        };
+        self.grids.get_or_replace(
+            (key, budget.limit()),
+            |kept| kept.serves_origins(origins),
+            || {
+                let b = self.triangles().bounds();
+                let reach = b.magnitude() + GRID_HEADROOM * b.extent().max_element();
+                let built_for = key.with_ray_origins(origins.max(reach));
+                let g = UniformGrid::build_until(self.triangles(), &built_for, budget, deadline)?;
+                self.counters.grid.fetch_add(1, Ordering::Relaxed);
+                Ok(g)
+            },
+        )
     }
 
     /// The BSP tree of the scene for these options (their memory limit included),
@@ -488,6 +533,58 @@ mod tests {
         assert_eq!(frames[1], frames[3]);
         let b = index.builds();
         assert_eq!((b.triangles, b.bvh, b.bsp), (1, 1, 1));
+    }
+
+    /// A view of the scene, framed, from `distance` scene sizes (its largest extent)
+    /// away from its centre.
+    fn view_from(scene: &Scene, distance: f64) -> View<'_> {
+        let vp = Viewport::new(32, 24).unwrap();
+        let b = scene.bounds();
+        let (centre, size) = (b.center(), b.extent().max_element());
+        let eye = centre + DVec3::new(0.6, 0.4, 1.0).normalize() * distance * size;
+        let fov = (2.0 * (1.2 / distance).atan()).to_degrees();
+        let (near, far) = (size * distance * 0.2, size * distance * 2.0);
+        let cam = Camera::perspective(eye, centre, DVec3::Y, fov, near, far);
+        View::new(scene, &cam, vp, &PrepareOptions::default()).unwrap()
+    }
+
+    /// The grid's frames, ids and depth bits, against the BVH's (which no grid touches).
+    fn assert_grid_equals_bvh(index: &SceneIndex<'_>, view: &View<'_>, distance: f64) {
+        let ro = RenderOptions::default();
+        let (grid, _) = index
+            .render_view(view, Algorithm::RaycastGrid, &ro)
+            .unwrap();
+        let (bvh, _) = index.render_view(view, Algorithm::RaycastBvh, &ro).unwrap();
+        assert!(bvh.covered_pixels() > 0, "distance {distance:e}");
+        assert_eq!(grid.ids, bvh.ids, "ids from distance {distance:e}");
+        let bits = |f: &Frame| f.depth.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&grid), bits(&bvh), "depth from distance {distance:e}");
+    }
+
+    #[test]
+    fn one_grid_serves_eyes_at_very_different_distances() {
+        let scene = demo::default_scene();
+        let index = SceneIndex::new(&scene);
+        // Within the headroom: one grid, whichever eye asks first.
+        let reach = GRID_HEADROOM;
+        for distance in [3.0, 40.0, reach * 0.5] {
+            assert_grid_equals_bvh(&index, &view_from(&scene, distance), distance);
+        }
+        assert_eq!(index.builds().grid, 1);
+        // Farther than the cells' growth covers (they are grown by at least `10^-7` of
+        // their size): the grid is rebuilt for that eye, and then serves the nearer ones.
+        let far = 1e9;
+        assert_grid_equals_bvh(&index, &view_from(&scene, far), far);
+        assert_eq!(index.builds().grid, 2);
+        for distance in [3.0, reach * 0.5] {
+            assert_grid_equals_bvh(&index, &view_from(&scene, distance), distance);
+        }
+        assert_eq!(index.builds().grid, 2);
+        // A grid built for the far eye first gives the near eye's frame bit for bit.
+        let fresh = SceneIndex::new(&scene);
+        assert_grid_equals_bvh(&fresh, &view_from(&scene, far), far);
+        assert_grid_equals_bvh(&fresh, &view_from(&scene, 3.0), 3.0);
+        assert_eq!(fresh.builds().grid, 1);
     }
 
     #[test]

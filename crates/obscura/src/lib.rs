@@ -42,9 +42,7 @@
 pub mod accel;
 pub mod budget;
 pub mod clip;
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod cpu;
+pub(crate) mod cpu;
 pub mod cull;
 mod error;
 pub mod frame;
@@ -53,12 +51,16 @@ pub mod index;
 pub mod lines;
 mod memory;
 pub mod raster;
-#[doc(hidden)]
-pub mod rng;
+pub(crate) mod rng;
 pub mod scene;
 pub mod surface;
 pub mod view;
 pub mod work;
+
+#[doc(hidden)]
+pub mod bench_support;
+#[cfg(test)]
+mod tests;
 
 pub use error::{Error, Result};
 pub use frame::{BACKGROUND, Frame, RgbImage};

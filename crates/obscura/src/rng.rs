@@ -3,14 +3,14 @@
 //! the BSP's candidate sampling and the randomized tests are the same on every machine
 //! without a dependency.
 //!
-//! Not part of the library's API: public only for the crate's own integration tests and
-//! benches, which generate their inputs with it.
+//! Not part of the library's API: crate-internal; the benches reach it through the
+//! hidden `bench_support` module, which generates their inputs with it.
 
 /// A deterministic pseudo-random sequence (SplitMix64); the value is the state, the
 /// seed at the start.
 ///
 /// ```
-/// use obscura::rng::SplitMix64;
+/// use obscura::bench_support::SplitMix64;
 /// let (mut a, mut b) = (SplitMix64(7), SplitMix64(7));
 /// assert_eq!(a.next_u64(), b.next_u64());
 /// let x = a.range(2.0, 3.0);

@@ -2,6 +2,9 @@
 //! memory, cameras from matrices and from pinhole intrinsics, and file formats behind
 //! cargo features. Every expectation is computed here, on inputs written here.
 
+mod common;
+
+use common::TempDir;
 use glam::{DMat4, DVec3};
 use obscura::scene::{Faces, Intrinsics};
 use obscura::{Algorithm, Camera, Error, Frame, PrepareOptions, Scene, Viewport, prepare, render};
@@ -55,12 +58,6 @@ fn picture(scene: &Scene, camera: &Camera, viewport: Viewport) -> Frame {
         .0
 }
 
-fn tempdir(tag: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("obscura-api-{}-{tag}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 fn camera() -> Camera {
     Camera::perspective(
         DVec3::new(1.9, 1.4, 4.2),
@@ -95,11 +92,10 @@ fn a_scene_from_arrays_renders_as_the_same_mesh_loaded_from_obj() {
             .collect();
         obj.push_str(&format!("f {}\n", face.join(" ")));
     }
-    let dir = tempdir("obj");
+    let dir = TempDir::new("obj");
     let path = dir.join("same.obj");
     std::fs::write(&path, obj).unwrap();
     let loaded = Scene::load(&path).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
 
     assert_eq!(scene.face_count(), 9);
     assert_eq!(loaded.face_count(), 9);
@@ -347,7 +343,7 @@ fn intrinsics_that_are_no_camera_are_refused_saying_why() {
 /// CI's `cargo test -p obscura --no-default-features`).
 #[test]
 fn formats_left_out_of_the_build_name_their_feature() {
-    let dir = tempdir("features");
+    let dir = TempDir::new("features");
     let cases = [
         ("a.obj", "obj", cfg!(feature = "obj")),
         ("a.gltf", "gltf", cfg!(feature = "gltf")),
@@ -368,5 +364,4 @@ fn formats_left_out_of_the_build_name_their_feature() {
             assert!(m.contains(name), "{m}");
         }
     }
-    std::fs::remove_dir_all(&dir).ok();
 }

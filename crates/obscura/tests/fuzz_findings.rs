@@ -14,39 +14,13 @@
     feature = "toml-scene"
 ))]
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::path::Path;
 
+mod common;
+
+use common::TempDir;
 use obscura::scene::load::load_file;
 use obscura::{Algorithm, PrepareOptions, Scene, Viewport};
-
-/// A fresh folder under the system temp dir, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(tag: &str) -> Self {
-        static NEXT: AtomicUsize = AtomicUsize::new(0);
-        let dir = std::env::temp_dir().join(format!(
-            "obscura-fuzz-findings-{}-{tag}-{}",
-            std::process::id(),
-            NEXT.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-
-    fn write(&self, name: &str, bytes: &[u8]) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::write(&p, bytes).unwrap();
-        p
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 /// What the fuzz targets check of a scene that loaded: its default camera is valid and
 /// the z-buffer renders it at 64x48.
@@ -120,6 +94,6 @@ fn a_mesh_near_the_coordinate_limit_is_framed_or_refused_by_name() {
         stl.extend_from_slice(&v.to_le_bytes());
     }
     stl.extend_from_slice(&[0, 0]);
-    let path = dir.write("far_binary.stl", &stl);
+    let path = dir.write("far_binary.stl", stl);
     load_or_refuse(&path);
 }

@@ -6,45 +6,16 @@
 //! the object, or the file, line and entry.
 
 #[cfg(all(feature = "obj", feature = "toml-scene"))]
-use std::path::{Path, PathBuf};
-#[cfg(all(feature = "obj", feature = "toml-scene"))]
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::path::Path;
 
+mod common;
+
+#[cfg(all(feature = "obj", feature = "toml-scene"))]
+use common::TempDir;
 use glam::{DMat4, DVec3};
 use obscura::scene::{MIN_EXTENT, ObjectDesc, demo};
 use obscura::surface::{Algorithm, RenderOptions, render};
 use obscura::{BACKGROUND, Camera, Frame, PrepareOptions, Scene, Viewport, prepare};
-
-#[cfg(all(feature = "obj", feature = "toml-scene"))]
-/// A fresh directory under the system temp dir, removed when dropped.
-struct TempDir(PathBuf);
-
-#[cfg(all(feature = "obj", feature = "toml-scene"))]
-impl TempDir {
-    fn new(tag: &str) -> Self {
-        static NEXT: AtomicUsize = AtomicUsize::new(0);
-        let dir = std::env::temp_dir().join(format!(
-            "obscura-ranges-{}-{tag}-{}",
-            std::process::id(),
-            NEXT.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir_all(&dir).unwrap();
-        TempDir(dir)
-    }
-
-    fn write(&self, name: &str, contents: &str) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::write(&p, contents).unwrap();
-        p
-    }
-}
-
-#[cfg(all(feature = "obj", feature = "toml-scene"))]
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 /// A unit box and a smaller one half sunk into it (occlusion, an interpenetration),
 /// both scaled by `scale` about the origin and then moved to `offset` on every axis.
@@ -231,7 +202,7 @@ fn toml_scales_out_of_range_name_the_scale_and_its_line() {
     ] {
         let p = t.write(
             "s.toml",
-            &format!("# a box\n[[object]]\nprimitive = \"box\"\nsize = [1, 1, 1]\nscale = {v}\n"),
+            format!("# a box\n[[object]]\nprimitive = \"box\"\nsize = [1, 1, 1]\nscale = {v}\n"),
         );
         let e = load_err(&p);
         assert!(
@@ -281,7 +252,7 @@ fn a_bad_matrix_entry_is_named_with_its_line() {
             .collect();
         let p = t.write(
             "m.toml",
-            &format!(
+            format!(
                 "[[object]]\nprimitive = \"box\"\nsize = [1, 1, 1]\nmatrix = [\n{}]\n",
                 body.concat()
             ),

@@ -14,27 +14,26 @@
 #![cfg(unix)]
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
+mod common;
+
+use common::TempDir;
 use obscura::scene::load::{LoadOptions, load_file, load_file_with};
 use obscura::{Error, Scene};
 
-/// A fresh directory `ROOT` with `ROOT/scene` inside, removed when dropped.
+/// A fresh directory `ROOT` (canonical) with `ROOT/scene` inside, removed when dropped.
 struct Dirs {
     root: PathBuf,
+    _dir: TempDir,
 }
 
 impl Dirs {
     fn new(tag: &str) -> Self {
-        static NEXT: AtomicUsize = AtomicUsize::new(0);
-        let root = std::env::temp_dir().join(format!(
-            "obscura-references-{}-{tag}-{}",
-            std::process::id(),
-            NEXT.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir_all(root.join("scene")).unwrap();
+        let dir = TempDir::new(tag);
+        std::fs::create_dir_all(dir.join("scene")).unwrap();
         Dirs {
-            root: std::fs::canonicalize(root).unwrap(),
+            root: std::fs::canonicalize(&dir.0).unwrap(),
+            _dir: dir,
         }
     }
 
@@ -48,12 +47,6 @@ impl Dirs {
         std::fs::create_dir_all(p.parent().unwrap()).unwrap();
         std::fs::write(&p, contents).unwrap();
         p
-    }
-}
-
-impl Drop for Dirs {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.root);
     }
 }
 

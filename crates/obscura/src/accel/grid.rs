@@ -663,6 +663,14 @@ impl UniformGrid {
     pub fn rounding(&self, origin: DVec3) -> f64 {
         ROUNDING * (origin.abs().max_element() + self.magnitude)
     }
+
+    /// Whether rays from origins with coordinates up to `magnitude` (absolute value)
+    /// walk the cells (rather than being traced against every triangle, see
+    /// [`GridCounters::far_rays`]): the grid was built for such origins or farther.
+    #[must_use]
+    pub(crate) fn serves_origins(&self, magnitude: f64) -> bool {
+        self.refs.is_empty() || self.rounding(DVec3::splat(magnitude)) <= self.max_tau
+    }
 }
 
 /// Cells per axis for `n` triangles in a box of extent `e` (see the module doc), none

@@ -74,13 +74,7 @@ impl SceneTriangles {
         let mut pts: Vec<DVec3> = Vec::new();
         for (k, o) in scene.objects().iter().enumerate() {
             let first = out.vertices.len() as u32;
-            world.clear();
-            world.extend(
-                o.mesh
-                    .positions()
-                    .iter()
-                    .map(|&p| o.transform.transform_point3(p)),
-            );
+            o.world_positions_into(&mut world);
             for p in 0..o.mesh.polygon_count() {
                 let poly = o.mesh.polygon(p);
                 let index = out.faces.len() as u32;

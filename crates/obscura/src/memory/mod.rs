@@ -22,6 +22,9 @@
 //! cost no page fault at all: the `obscura` command line does (its `allocator.rs`).
 //! Choosing a global allocator is a program's decision, so the library offers none.
 
+#[cfg(test)]
+mod probe;
+
 use std::collections::TryReserveError;
 
 /// The size of a transparent huge page on x86-64 and most 64-bit Linux systems.
@@ -116,30 +119,7 @@ fn advise_impl(_ptr: *mut u8, _bytes: usize) -> bool {
 mod tests {
     use super::*;
 
-    /// Whether this system backs advised ranges with huge pages.
-    fn huge_pages_enabled() -> bool {
-        std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled")
-            .is_ok_and(|s| s.contains("[madvise]") || s.contains("[always]"))
-    }
-
-    /// `AnonHugePages` of the mapping holding `addr`, in KiB, from `/proc/self/smaps`.
-    fn anon_huge_kib(addr: usize) -> Option<u64> {
-        let text = std::fs::read_to_string("/proc/self/smaps").ok()?;
-        let mut inside = false;
-        for line in text.lines() {
-            let first = line.split_whitespace().next().unwrap_or("");
-            if let Some((a, b)) = first.split_once('-')
-                && let (Ok(a), Ok(b)) = (usize::from_str_radix(a, 16), usize::from_str_radix(b, 16))
-            {
-                inside = a <= addr && addr < b;
-                continue;
-            }
-            if inside && let Some(rest) = line.strip_prefix("AnonHugePages:") {
-                return rest.trim().trim_end_matches("kB").trim().parse().ok();
-            }
-        }
-        None
-    }
+    use super::probe::{anon_huge_kib, huge_pages_enabled};
 
     #[test]
     fn buffers_hold_what_is_written_with_and_without_advice() {

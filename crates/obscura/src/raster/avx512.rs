@@ -52,11 +52,6 @@ impl Lanes for Avx512 {
         unsafe { _mm512_setr_pd(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]) }
     }
     #[inline(always)]
-    fn broadcast_lane(self, v: __m512d, j: usize) -> __m512d {
-        // A permutation by a vector of indices: no store and reload of `v`.
-        unsafe { _mm512_permutexvar_pd(_mm512_set1_epi64(j as i64 & 7), v) }
-    }
-    #[inline(always)]
     fn add(self, a: __m512d, b: __m512d) -> __m512d {
         unsafe { _mm512_add_pd(a, b) }
     }

@@ -40,7 +40,7 @@ pub fn key_of(z: f64) -> f32 {
     if MIN_KEY > k { MIN_KEY } else { k }
 }
 
-/// How the converted depths are computed from keys (see [`Lanes::resolve`]).
+/// How the converted depths are computed from keys (by the rasterizer's lanes, `Lanes::resolve`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum DepthOfKey {
     /// Perspective: `depth = near / key`, in `f32` (within one unit in the last place
@@ -60,7 +60,7 @@ pub enum DepthOfKey {
 }
 
 impl DepthOfKey {
-    /// The depth of one key (what every implementation of [`Lanes::resolve`] computes).
+    /// The depth of one key (what every implementation of `Lanes::resolve` computes).
     #[inline(always)]
     #[must_use]
     pub fn depth(self, key: f32) -> f32 {
@@ -85,8 +85,6 @@ pub trait Lanes: Copy {
     /// The lanes `a[0], ..., a[7]` built from values (in registers where the
     /// implementation can: no store and reload).
     fn set(self, a: [f64; 8]) -> Self::F;
-    /// Every lane equal to lane `j` of `v` (`j < 8`).
-    fn broadcast_lane(self, v: Self::F, j: usize) -> Self::F;
     /// `a + b` per lane.
     fn add(self, a: Self::F, b: Self::F) -> Self::F;
     /// `a - b` per lane.
@@ -213,10 +211,6 @@ impl Lanes for Portable {
     #[inline(always)]
     fn set(self, a: [f64; 8]) -> [f64; 8] {
         a
-    }
-    #[inline(always)]
-    fn broadcast_lane(self, v: [f64; 8], j: usize) -> [f64; 8] {
-        [v[j & 7]; 8]
     }
     #[inline(always)]
     fn add(self, a: [f64; 8], b: [f64; 8]) -> [f64; 8] {

@@ -11,17 +11,11 @@
 //! thesis, University of Utah, 1974): the depth buffer the block rasterizer fills.
 
 #[cfg(target_arch = "x86_64")]
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod avx512;
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod block;
+pub(crate) mod avx512;
+pub(crate) mod block;
 mod coverage;
 mod depth_plane;
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod lanes;
+pub(crate) mod lanes;
 mod rounding;
 mod setup;
 
@@ -29,5 +23,6 @@ pub use coverage::{
     EdgeFunction, FillRule, PixelRect, PolygonCoverage, edges_row_span, sample_rect,
 };
 pub use depth_plane::DepthPlane;
+pub use lanes::DepthOfKey;
 pub(crate) use rounding::{round_down, round_up, sample_range};
 pub use setup::{PolygonSetup, TriangleSetup};

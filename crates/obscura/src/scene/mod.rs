@@ -14,9 +14,7 @@ mod camera_matrices;
 pub mod demo;
 pub mod load;
 mod mesh;
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod random;
+pub(crate) mod random;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -173,6 +171,18 @@ impl Object {
                     .transform_point3(self.mesh.positions()[v as usize])
             })
             .collect()
+    }
+
+    /// Replaces `out` with the world-space position of every vertex of the mesh, in
+    /// mesh order (each computed as [`Self::world_polygon`] computes it).
+    pub(crate) fn world_positions_into(&self, out: &mut Vec<DVec3>) {
+        out.clear();
+        out.extend(
+            self.mesh
+                .positions()
+                .iter()
+                .map(|&p| self.transform.transform_point3(p)),
+        );
     }
 
     /// Colour of a local face: its material's, else the object's.

@@ -10,9 +10,12 @@
 //! | [`coplanar_grid`] | coplanar faces sharing edges (the fill rule) |
 //! | [`scaled_triangles`] | a fixed screen footprint split into `n` triangles (complexity sweeps) |
 
+#[cfg(test)]
 use std::f64::consts::TAU;
 
-use glam::{DMat4, DVec3};
+#[cfg(test)]
+use glam::DMat4;
+use glam::DVec3;
 
 use super::{Camera, Mesh, MeshBuilder, ObjectDesc, Scene};
 use crate::rng::SplitMix64;
@@ -30,6 +33,7 @@ fn soup(tris: &[[DVec3; 3]]) -> Mesh {
     b.finish().0
 }
 
+#[cfg(test)]
 fn unit_vector(rng: &mut SplitMix64) -> DVec3 {
     let z = rng.range(-1.0, 1.0);
     let a = rng.range(0.0, TAU);
@@ -49,6 +53,7 @@ fn scene_of(name: &str, mesh: Mesh, color: [f32; 3]) -> Scene {
     s
 }
 
+#[cfg(test)]
 /// `n` triangles with centres uniform in the cube `[-extent, extent]^3` and vertices
 /// within `size` of their centre: one open object (a triangle soup).
 #[must_use]
@@ -67,6 +72,7 @@ pub fn random_triangles(n: usize, seed: u64, extent: f64, size: f64) -> Scene {
     scene_of("random triangles", soup(&tris), [0.8, 0.6, 0.4])
 }
 
+#[cfg(test)]
 /// `n` slivers: length about `2 * extent`, width 1% to 3% of it, random orientations.
 #[must_use]
 pub fn long_thin_triangles(n: usize, seed: u64, extent: f64) -> Scene {
@@ -88,6 +94,7 @@ pub fn long_thin_triangles(n: usize, seed: u64, extent: f64) -> Scene {
     scene_of("long thin triangles", soup(&tris), [0.5, 0.7, 0.9])
 }
 
+#[cfg(test)]
 /// `n` square quads of side `2 * size` through a small region, randomly tilted, so
 /// that most pairs interpenetrate.
 #[must_use]
@@ -113,6 +120,7 @@ pub fn interpenetrating_quads(n: usize, seed: u64, size: f64) -> Scene {
     scene_of("interpenetrating quads", b.finish().0, [0.6, 0.85, 0.5])
 }
 
+#[cfg(test)]
 /// Three tilted blades arranged as a pinwheel: each blade's centre line is tangent to
 /// a circle around the origin, rotated by 120 degrees from the last, and rises along its
 /// length, so where blade `k` crosses blade `k + 1` it is the higher one. Each lies over
@@ -133,6 +141,7 @@ pub fn cyclic_triple() -> Scene {
     scene_of("cyclic triple", soup(&tris), [0.9, 0.5, 0.5])
 }
 
+#[cfg(test)]
 /// A flat grid of `nx * ny` quads in the plane z = 0, each split into two triangles
 /// along alternating diagonals, vertices jittered in the plane: coplanar faces that
 /// share edges everywhere.
@@ -225,6 +234,7 @@ pub fn scaled_triangles(n: usize, seed: u64) -> Scene {
     s
 }
 
+#[cfg(test)]
 /// Cameras around a scene: `count` perspective views from random directions at 1.5 to
 /// 3 bounding radii, the last one at 1.1 radii with its near plane through the middle of
 /// the bounds (so it cuts the scene); and one orthographic view.
@@ -280,6 +290,7 @@ pub fn orbit_cameras(scene: &Scene, count: usize, seed: u64) -> Vec<Camera> {
     cams
 }
 
+#[cfg(test)]
 /// A scene with the given objects' transforms mirrored (negative determinant), to check
 /// that winding is handled.
 #[must_use]

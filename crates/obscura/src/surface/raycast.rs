@@ -29,7 +29,7 @@
 //! | --- | --- | --- |
 //! | [`Acceleration::BruteForce`] | every triangle (the seeds' `RayCasting`) | triangle tests |
 //! | [`Acceleration::Bounds`] | each object's bounding volume, then the triangles of the objects hit, nearest volume first, stopping at a volume behind the nearest hit | bound tests and hits, tests saved |
-//! | [`Acceleration::Bvh`] | [`crate::accel::bvh`]: binned-SAH hierarchy, ordered traversal of packets of 4x4 rays ([`crate::accel::bvh::packet`]) | build, nodes, depth, node visits per ray and per packet, Mrays/s |
+//! | [`Acceleration::Bvh`] | [`crate::accel::bvh`]: binned-SAH hierarchy, ordered traversal of packets of 4x4 rays (`accel/bvh/packet.rs`) | build, nodes, depth, node visits per ray and per packet, Mrays/s |
 //! | [`Acceleration::Grid`] | [`crate::accel::grid`]: uniform grid, 3D-DDA, hits accepted only in the current cell | cells, refs, cells per ray |
 //!
 //! All four run the same exact test on the same triangles, so they return the same

@@ -229,17 +229,7 @@ impl Subdivision<'_> {
                 let fi = self.members[start] as usize;
                 let f = &self.faces.faces[fi];
                 if self.relations[start] == Relation::Surrounding {
-                    for y in win.y0..win.y1 {
-                        fill_run(
-                            &mut self.frame,
-                            self.transform,
-                            y,
-                            win.x0,
-                            win.x1,
-                            &f.plane,
-                            f.face,
-                        );
-                    }
+                    self.fill_window(win, fi);
                     self.decided(win, 2);
                 } else {
                     let r = intersect(win, f.rect);
@@ -259,24 +249,29 @@ impl Subdivision<'_> {
             }
             _ => {
                 if let Some(w) = self.surrounding_nearest(win, start, end) {
-                    let f = &self.faces.faces[w as usize];
-                    for y in win.y0..win.y1 {
-                        fill_run(
-                            &mut self.frame,
-                            self.transform,
-                            y,
-                            win.x0,
-                            win.x1,
-                            &f.plane,
-                            f.face,
-                        );
-                    }
+                    self.fill_window(win, w as usize);
                     self.decided(win, 3);
                 } else {
                     self.counters.rules[4] += 1;
                     self.subdivide(win, start, end, depth);
                 }
             }
+        }
+    }
+
+    /// Paints every pixel of the window with face `fi` (a face surrounding it).
+    fn fill_window(&mut self, win: PixelRect, fi: usize) {
+        let f = &self.faces.faces[fi];
+        for y in win.y0..win.y1 {
+            fill_run(
+                &mut self.frame,
+                self.transform,
+                y,
+                win.x0,
+                win.x1,
+                &f.plane,
+                f.face,
+            );
         }
     }
 

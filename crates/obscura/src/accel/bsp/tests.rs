@@ -1,5 +1,5 @@
 //! Small facts of the BSP tree; the cross-checks against the z-buffer are in
-//! `tests/bsp.rs`.
+//! `src/tests/bsp.rs`.
 
 use super::*;
 use crate::scene::{ObjectDesc, demo};

@@ -7,7 +7,7 @@
 //! binary tree is then collapsed into an 8-wide one (Dammertz et al., "Shallow Bounding
 //! Volume Hierarchies for Fast SIMD Ray Tracing of Incoherent Rays", 2008; Embree's
 //! BVH8). Traversal: ordered, with a conservative single-precision box test (see
-//! [`traverse`]).
+//! `traverse.rs`).
 //!
 //! - Input: [`SceneTriangles`]. Output: a [`Bvh`], built once and reusable for any
 //!   number of views (it holds its own copy of the triangles in leaf order).
@@ -23,27 +23,23 @@
 //!   one 8-lane computation and never visits a leaf node. Wider nodes mean fewer
 //!   dependent steps per ray: on Sponza's atrium view a ray visits about 17 nodes
 //!   against 27 with 4-wide nodes (and about 45 binary ones).
-//! - Traversal ([`traverse`]): the children a ray enters are visited nearest first, the
+//! - Traversal (`traverse.rs`): the children a ray enters are visited nearest first, the
 //!   others pushed with their entry distance and skipped when popped if a nearer hit
 //!   was found since; triangles by the watertight `f64` test of
 //!   [`crate::accel::triangles`], so the BVH finds exactly the hits brute force finds.
 //!   [`Bvh::closest_hit_recursive`] is the seeds' `IntersectionTest` verbatim
 //!   (unordered recursion), kept for comparison.
-//! - Packets ([`packet`]): coherent rays (4x4 pixels) traced together, with per-ray
+//! - Packets (`packet.rs`): coherent rays (4x4 pixels) traced together, with per-ray
 //!   masks, so that each gets exactly its single-ray hit; the renderer uses them.
 //! - Limitations: boxes are single precision (rounded outwards), so
 //!   scenes with coordinates beyond about 10^30 are not supported; at most 2^29
 //!   triangles.
 
 mod build;
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod packet;
+pub(crate) mod packet;
 mod packet_lanes;
 mod ray_packet;
-// Internal: public only for the crate's own tests and benches (not API).
-#[doc(hidden)]
-pub mod traverse;
+pub(crate) mod traverse;
 
 use std::time::Instant;
 

@@ -86,13 +86,7 @@ impl TriangleSoup {
         for o in scene.objects() {
             let start = soup.triangles.len();
             // Each vertex once, as `Object::world_polygon` computes it.
-            world.clear();
-            world.extend(
-                o.mesh
-                    .positions()
-                    .iter()
-                    .map(|&p| o.transform.transform_point3(p)),
-            );
+            o.world_positions_into(&mut world);
             // Polygons along a Morton curve (see `morton_key`), so no triangle is
             // moved afterwards.
             order.clear();

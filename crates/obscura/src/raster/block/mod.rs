@@ -52,7 +52,9 @@ mod tests;
 
 pub use occlusion::nearest_key;
 pub use resolve::resolve;
-pub use setup::{BlockSetup, TriangleBatch, TrianglePoints, triangle, triangles8};
+#[cfg(test)]
+pub use setup::TriangleBatch;
+pub use setup::{BlockSetup, TrianglePoints, triangle, triangles8};
 pub use target::BlockTarget;
 
 use super::PixelRect;

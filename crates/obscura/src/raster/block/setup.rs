@@ -68,6 +68,7 @@ impl<const E: usize> BlockSetup<E> {
     }
 
     /// Whether sample `(px, py)` is inside every edge (the per-pixel rule, for tests).
+    #[cfg(test)]
     #[must_use]
     pub fn covers_sample(&self, px: f64, py: f64) -> bool {
         (0..E).all(|k| {

@@ -21,7 +21,7 @@
 //! [`render_reference`] is the seeds' algorithm written plainly, one
 //! [`PolygonCoverage`](crate::raster::PolygonCoverage) per polygon, the depth stepped
 //! serially along each span. [`render`] computes the same picture faster with the block
-//! rasterizer of [`crate::raster::block`]:
+//! rasterizer of `raster/block/`:
 //! - coverage by the shared rule's canonical edge expression, evaluated in lanes (a
 //!   deliberate twin of [`EdgeFunction::inside`](crate::raster::EdgeFunction::inside),
 //!   which `raster::block`'s tests compare with it pixel by pixel): narrow polygons row

@@ -1,17 +1,17 @@
 //! Warnock's area subdivision: the z-buffer's frame on every kind of scene, the window
 //! relations against brute force, and the seed's five rules firing where they should.
 
-mod hsr_scenes;
+use super::hsr_scenes;
 
+use crate::raster::{FillRule, PixelRect, PolygonCoverage};
+use crate::rng::SplitMix64;
+use crate::scene::Camera;
+use crate::surface::stats::WarnockStats;
+use crate::surface::warnock::{Relation, classify};
+use crate::surface::{Algorithm, RenderOptions};
+use crate::{BACKGROUND, Stats, prepare};
 use glam::DVec3;
 use hsr_scenes::{Case, scene_of};
-use obscura::raster::{FillRule, PixelRect, PolygonCoverage};
-use obscura::rng::SplitMix64;
-use obscura::scene::Camera;
-use obscura::surface::stats::WarnockStats;
-use obscura::surface::warnock::{Relation, classify};
-use obscura::surface::{Algorithm, RenderOptions};
-use obscura::{BACKGROUND, Stats, prepare};
 
 const ALGO: Algorithm = Algorithm::Warnock;
 
@@ -308,19 +308,19 @@ fn windows_see_only_faces_not_disjoint_from_them() {
 #[test]
 fn same_frames_with_the_inclusive_fill_rule() {
     // The seed-task scene with the inclusive rule (shared edges covered twice).
-    let scene = obscura::Scene::demo("seed-task").unwrap();
-    let vp = obscura::Viewport::new(32, 32).unwrap();
+    let scene = crate::Scene::demo("seed-task").unwrap();
+    let vp = crate::Viewport::new(32, 32).unwrap();
     let view = prepare(
         &scene,
         scene.camera().unwrap(),
         vp,
-        &obscura::PrepareOptions::default(),
+        &crate::PrepareOptions::default(),
     )
     .unwrap();
     let opts = RenderOptions::default().with_fill_rule(FillRule::Inclusive);
-    let (z, _) = obscura::render(Algorithm::ZBuffer, &view, &opts).unwrap();
+    let (z, _) = crate::render(Algorithm::ZBuffer, &view, &opts).unwrap();
     for algo in [Algorithm::Warnock, Algorithm::Scanline] {
-        let (f, _) = obscura::render(algo, &view, &opts).unwrap();
+        let (f, _) = crate::render(algo, &view, &opts).unwrap();
         hsr_scenes::assert_same("seed task, inclusive", algo, &f, &z);
     }
 }

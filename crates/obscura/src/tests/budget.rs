@@ -6,13 +6,13 @@
 use std::path::PathBuf;
 
 #[cfg(all(feature = "obj", feature = "toml-scene"))]
-use obscura::scene::load::LoadOptions;
+use crate::scene::load::LoadOptions;
 #[cfg(all(feature = "obj", feature = "toml-scene"))]
-use obscura::scene::load::toml_scene::{MAX_PLACED_FACES, PLACED_FACE_BYTES, PLACED_VERTEX_BYTES};
-use obscura::scene::random::random_triangles;
-use obscura::scene::{Scene, Viewport, demo};
-use obscura::surface::{Algorithm, RenderOptions, render};
-use obscura::{Error, PrepareOptions, prepare};
+use crate::scene::load::toml_scene::{MAX_PLACED_FACES, PLACED_FACE_BYTES, PLACED_VERTEX_BYTES};
+use crate::scene::random::random_triangles;
+use crate::scene::{Scene, Viewport, demo};
+use crate::surface::{Algorithm, RenderOptions, render};
+use crate::{Error, PrepareOptions, prepare};
 
 #[cfg(all(feature = "obj", feature = "toml-scene"))]
 fn tempdir(name: &str) -> PathBuf {
@@ -23,7 +23,7 @@ fn tempdir(name: &str) -> PathBuf {
 
 /// The fields of a budget error, or a failure naming what came instead.
 /// The scene seen from its default camera, prepared with the default options.
-fn default_view(scene: &Scene, vp: Viewport) -> obscura::PreparedView<'_> {
+fn default_view(scene: &Scene, vp: Viewport) -> crate::PreparedView<'_> {
     prepare(
         scene,
         &scene.default_camera(vp.aspect()),
@@ -101,13 +101,13 @@ fn octree_depth_10_is_refused_before_building_and_its_estimate_bounds_the_tree()
     assert!(bytes > 16 << 20 && nodes > 0);
     // The check is the one the entry point runs before any node is made.
     assert!(matches!(
-        obscura::surface::octree::check_budget(&scene, &small),
+        crate::surface::octree::check_budget(&scene, &small),
         Err(Error::Budget { .. })
     ));
     // The estimate is an upper bound of what the build makes: at depths 3 to 6 the
     // tree's own memory figure is below it.
     for depth in 3..=6 {
-        let estimate = match obscura::surface::octree::check_budget(
+        let estimate = match crate::surface::octree::check_budget(
             &scene,
             &RenderOptions::default()
                 .with_octree_depth(depth)
@@ -138,7 +138,7 @@ fn a_frame_larger_than_the_budget_is_refused_before_it_is_allocated() {
     let options = RenderOptions::default().with_memory_limit(Some(64 << 20));
     for a in Algorithm::ALL {
         let (structure, count, bytes, _, _, _) = budget_fields(render(a, &view, &options));
-        assert_eq!(structure, obscura::surface::FRAME_STRUCTURE, "{a}");
+        assert_eq!(structure, crate::surface::FRAME_STRUCTURE, "{a}");
         assert_eq!(count, 16384 * 16384, "{a}");
         // At least the ids and depths: 8 bytes a pixel.
         assert!(bytes >= 8 * 16384 * 16384, "{a}: {bytes}");
@@ -156,7 +156,7 @@ fn a_prepared_view_over_the_budget_is_refused() {
         vp,
         &options,
     ));
-    assert_eq!(structure, obscura::view::BUDGET_STRUCTURE);
+    assert_eq!(structure, crate::view::BUDGET_STRUCTURE);
     assert_eq!(count, 2000);
     // At least 3 vertices of 4 f64 a triangle.
     assert!(bytes >= 2000 * 3 * 32, "{bytes}");
@@ -202,8 +202,10 @@ fn scene_file_placements_over_the_face_cap_are_refused_at_their_line() {
     assert_eq!(faces, 20_000);
     let crossing = (MAX_PLACED_FACES / faces) as usize + 1;
     write_placements(&dir.join("many.toml"), "grid.obj", crossing + 10);
-    let mut options = LoadOptions::default();
-    options.memory_limit = Some(u64::MAX);
+    let options = LoadOptions {
+        memory_limit: Some(u64::MAX),
+        ..LoadOptions::default()
+    };
     let spec = dir.join("many.toml");
     let e = Scene::load_with(spec.to_str().unwrap(), &options).unwrap_err();
     let line = 2 + 3 * (crossing - 1);
@@ -237,8 +239,10 @@ fn scene_file_placements_over_the_budget_are_refused_naming_the_file_and_line() 
     let crossing = (limit / per) as usize + 1;
     write_placements(&dir.join("many.toml"), "grid.obj", crossing + 5);
     let spec = dir.join("many.toml");
-    let mut options = LoadOptions::default();
-    options.memory_limit = Some(limit);
+    let mut options = LoadOptions {
+        memory_limit: Some(limit),
+        ..LoadOptions::default()
+    };
     let (structure, count, bytes, got_limit, option, at) =
         budget_fields(Scene::load_with(spec.to_str().unwrap(), &options));
     assert!(structure.contains("faces placed"), "{structure}");

@@ -4,15 +4,15 @@
 
 use std::collections::HashMap;
 
-use glam::{DMat4, DVec3};
-use obscura::accel::octree::{
+use crate::accel::octree::{
     BooleanOp, Cell, Direction, Leaf, NodeKind, Octree, Region, TriangleSoup, front_to_back_order,
     triangle_box_overlap,
 };
-use obscura::frame::BACKGROUND;
-use obscura::scene::{Camera, ObjectDesc, Scene, Viewport, demo};
-use obscura::surface::{Algorithm, RenderOptions, render};
-use obscura::{PrepareOptions, prepare};
+use crate::frame::BACKGROUND;
+use crate::scene::{Camera, ObjectDesc, Scene, Viewport, demo};
+use crate::surface::{Algorithm, RenderOptions, render};
+use crate::{PrepareOptions, prepare};
+use glam::{DMat4, DVec3};
 
 // ---------------------------------------------------------------------------------
 // Brute force
@@ -236,7 +236,7 @@ fn assert_matches_grid(tree: &Octree, grid: &Grid, what: &str) {
 // ---------------------------------------------------------------------------------
 // Shapes
 
-fn one_object(mesh: obscura::scene::Mesh, transform: DMat4) -> Scene {
+fn one_object(mesh: crate::scene::Mesh, transform: DMat4) -> Scene {
     let mut s = Scene::new();
     s.add(ObjectDesc::new("solid", mesh).with_transform(transform))
         .unwrap();
@@ -347,7 +347,7 @@ fn open_meshes_make_a_shell_without_inside() {
     s.add(ObjectDesc::new("floor", demo::grid_mesh(2.0, 2.0, 2, 2)))
         .unwrap();
     // A closed box with one face missing: open, so it has no inside either.
-    let mut b = obscura::scene::MeshBuilder::new();
+    let mut b = crate::scene::MeshBuilder::new();
     for i in 0..8u32 {
         b.push_position(
             DVec3::new(
@@ -553,7 +553,7 @@ fn random_tree(seed: u64, depth: u32) -> Octree {
     // Coarse blocks in one half, fine noise in the other, so that neighbours of every
     // size meet.
     let hash = |a: u32, b: u32, c: u32, s: u32| {
-        let mut r = obscura::rng::SplitMix64(
+        let mut r = crate::rng::SplitMix64(
             seed ^ (u64::from(a) << 40 | u64::from(b) << 20 | u64::from(c)) ^ u64::from(s) << 60,
         );
         r.next_u64() % 3
@@ -679,7 +679,7 @@ fn slab(o: DVec3, d: DVec3, min: DVec3, max: DVec3) -> Option<(f64, f64)> {
 
 #[test]
 fn child_order_is_front_to_back_for_every_ray_octant() {
-    let mut rng = obscura::rng::SplitMix64(5);
+    let mut rng = crate::rng::SplitMix64(5);
     let region = Region::new(DVec3::ZERO, 1.0).unwrap();
     for octant in 0..8u32 {
         let mut checked = 0;
@@ -723,12 +723,12 @@ fn first_hit_is_the_nearest_partial_voxel() {
     let scene = &shape("torus"); // rays pass through the hole
     let tree = Octree::from_scene(scene, 5).unwrap();
     let region = *tree.region();
-    let partial: Vec<(u32, obscura::geom::Aabb)> = tree
+    let partial: Vec<(u32, crate::geom::Aabb)> = tree
         .leaves()
         .filter(|&i| tree.node(i).kind() == NodeKind::Partial)
         .map(|i| (i, region.cell_box(tree.cell(i))))
         .collect();
-    let mut rng = obscura::rng::SplitMix64(9);
+    let mut rng = crate::rng::SplitMix64(9);
     let (mut hits, mut misses) = (0, 0);
     for k in 0..400 {
         let o = region.min()
@@ -790,7 +790,7 @@ fn render_both(
     camera: &Camera,
     vp: Viewport,
     depth: u32,
-) -> (obscura::Frame, obscura::Frame) {
+) -> (crate::Frame, crate::Frame) {
     let view = prepare(scene, camera, vp, &PrepareOptions::default()).unwrap();
     let (z, _) = render(Algorithm::ZBuffer, &view, &RenderOptions::default()).unwrap();
     let (o, stats) = render(
@@ -959,7 +959,7 @@ fn the_default_scene_is_plausible_against_the_z_buffer() {
             let (k, local) = scene.locate_face(id).unwrap();
             let object = &scene.objects()[k];
             let polygon = object.mesh.polygons_of_face(local).start;
-            let normal = obscura::geom::newell_normal(&object.world_polygon(polygon)).normalize();
+            let normal = crate::geom::newell_normal(&object.world_polygon(polygon)).normalize();
             let ray = camera.ray(vp, i as f64 + 0.5, j as f64 + 0.5);
             let (dz, dq) = (f64::from(z.depth[j * w + i]), f64::from(o.depth[j * w + i]));
             let bound = 3f64.sqrt() * v / ray.direction.dot(normal).abs();
@@ -1039,7 +1039,7 @@ fn an_eye_within_a_voxel_of_a_surface_sees_past_it() {
     // those that stay in the layer of ground voxels meet the next one (the documented
     // growth of a surface by its voxels, seen from within the layer).
     let mut scene = Scene::new();
-    let mut b = obscura::scene::MeshBuilder::new();
+    let mut b = crate::scene::MeshBuilder::new();
     for (x, z) in [(-10.0, -10.0), (-10.0, 10.0), (10.0, 10.0), (10.0, -10.0)] {
         b.push_position(DVec3::new(x, 0.0, z));
     }

@@ -5,19 +5,19 @@
 //! four accelerations run the same exact test on the same triangles, so they must
 //! agree with each other bit for bit.
 
+use crate::accel::bvh::packet::{PACKET, PACKET_SIDE, PacketContext, PacketStack, RayPacket};
+use crate::accel::bvh::traverse::{Kernel, TraceCounters, TraversalStack};
+use crate::accel::bvh::{Bvh, BvhOptions, Slot, WIDTH};
+use crate::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
+use crate::accel::triangles::{ClosestHit, PrimaryRays, SceneTriangles, WatertightRay};
+use crate::cull::backface::BackfaceMode;
+use crate::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb};
+use crate::raster::FillRule;
+use crate::scene::{Camera, MeshBuilder, ObjectDesc, demo};
+use crate::surface::raycast::{self, Acceleration};
+use crate::surface::{Algorithm, AlgorithmStats, RenderOptions, render};
+use crate::{BACKGROUND, Frame, PrepareOptions, Scene, Stats, Viewport, prepare};
 use glam::{DMat3, DMat4, DVec3};
-use obscura::accel::bvh::packet::{PACKET, PACKET_SIDE, PacketContext, PacketStack, RayPacket};
-use obscura::accel::bvh::traverse::{Kernel, TraceCounters, TraversalStack};
-use obscura::accel::bvh::{Bvh, BvhOptions, Slot, WIDTH};
-use obscura::accel::grid::{GridCounters, GridOptions, Mailbox, UniformGrid};
-use obscura::accel::triangles::{ClosestHit, PrimaryRays, SceneTriangles, WatertightRay};
-use obscura::cull::backface::BackfaceMode;
-use obscura::geom::{Aabb, BoundsKind, Kdop, KdopKind, Obb};
-use obscura::raster::FillRule;
-use obscura::scene::{Camera, MeshBuilder, ObjectDesc, demo};
-use obscura::surface::raycast::{self, Acceleration};
-use obscura::surface::{Algorithm, AlgorithmStats, RenderOptions, render};
-use obscura::{BACKGROUND, Frame, PrepareOptions, Scene, Stats, Viewport, prepare};
 use proptest::prelude::*;
 
 const VARIANTS: [Algorithm; 4] = [
@@ -145,7 +145,7 @@ fn check_scene(name: &str, scene: &Scene, cam: &Camera, w: u32, h: u32, backface
 }
 
 fn random_triangles(count: usize, seed: u64) -> Scene {
-    let mut rng = obscura::rng::SplitMix64(seed);
+    let mut rng = crate::rng::SplitMix64(seed);
     let mut b = MeshBuilder::new();
     for _ in 0..count {
         let c = DVec3::new(
@@ -577,11 +577,11 @@ fn check_packets(
     let mut stack = PacketStack::default();
     let mut hits = 0;
     // A kernel the processor lacks falls back to the next best: say so, once.
-    if !obscura::cpu::Avx512::is_available() {
-        obscura::cpu::simd_test_skipped("AVX-512", "packets traced with AVX-512 lanes");
+    if !crate::cpu::Avx512::is_available() {
+        crate::cpu::simd_test_skipped("AVX-512", "packets traced with AVX-512 lanes");
     }
-    if !obscura::cpu::Avx2::is_available() {
-        obscura::cpu::simd_test_skipped("AVX2", "rays traced with the AVX2 build");
+    if !crate::cpu::Avx2::is_available() {
+        crate::cpu::simd_test_skipped("AVX2", "rays traced with the AVX2 build");
     }
     for (g, rays) in groups.iter().enumerate() {
         let expected: Vec<ClosestHit> = rays
@@ -715,7 +715,7 @@ fn incoherent_packets_and_missing_rays_equal_single_rays() {
         t_min: 0.0,
         tie: rays.tie_rule(),
     };
-    let mut rng = obscura::rng::SplitMix64(21);
+    let mut rng = crate::rng::SplitMix64(21);
     let mut v = |scale: f64| {
         DVec3::new(
             rng.range(-scale, scale),
@@ -1006,7 +1006,7 @@ proptest! {
 /// Triangles in the plane z = 0 (`flat`) or in a box, inside `[-1, 1]^3`, scaled by
 /// `size` and moved to `centre`; one triangle across the box for `count` 1.
 fn scaled_triangles(count: usize, seed: u64, flat: bool, size: f64, centre: DVec3) -> Scene {
-    let mut rng = obscura::rng::SplitMix64(seed);
+    let mut rng = crate::rng::SplitMix64(seed);
     let mut b = MeshBuilder::new();
     if count == 1 {
         // One triangle across the whole box.

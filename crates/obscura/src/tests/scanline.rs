@@ -1,15 +1,15 @@
 //! The scanline algorithm: the z-buffer's frame on every kind of scene, and its own
 //! machinery (active edge list, spans per row, coherence) on scenes worked by hand.
 
-mod hsr_scenes;
+use super::hsr_scenes;
 
+use crate::scene::Camera;
+use crate::surface::scanline::{self, SpanDecision};
+use crate::surface::stats::ScanlineStats;
+use crate::surface::{Algorithm, RenderOptions};
+use crate::{BACKGROUND, Stats, prepare};
 use glam::DVec3;
 use hsr_scenes::{Case, scene_of};
-use obscura::scene::Camera;
-use obscura::surface::scanline::{self, SpanDecision};
-use obscura::surface::stats::ScanlineStats;
-use obscura::surface::{Algorithm, RenderOptions};
-use obscura::{BACKGROUND, Stats, prepare};
 
 /// The scanline's own figures in the stats of a render.
 fn sl(stats: &Stats) -> &ScanlineStats {
@@ -236,7 +236,7 @@ fn active_edge_list_and_spans_of_a_hand_worked_scene() {
         &case.name,
         ALGO,
         &frame,
-        &obscura::render(Algorithm::ZBuffer, &view, &RenderOptions::default())
+        &crate::render(Algorithm::ZBuffer, &view, &RenderOptions::default())
             .unwrap()
             .0,
     );

@@ -2,12 +2,12 @@
 //! BSP): each algorithm must give the z-buffer's frame on them.
 #![allow(dead_code)]
 
+use crate::rng::SplitMix64;
+use crate::scene::demo;
+use crate::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport};
+use crate::surface::{Algorithm, RenderOptions, render};
+use crate::{Frame, PrepareOptions, PreparedView, Stats, prepare};
 use glam::{DMat4, DVec3};
-use obscura::rng::SplitMix64;
-use obscura::scene::demo;
-use obscura::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport};
-use obscura::surface::{Algorithm, RenderOptions, render};
-use obscura::{Frame, PrepareOptions, PreparedView, Stats, prepare};
 
 /// A scene with its camera and image size.
 pub struct Case {
@@ -78,7 +78,7 @@ pub fn assert_same(name: &str, algorithm: Algorithm, frame: &Frame, reference: &
 }
 
 fn id(i: u32) -> String {
-    if i == obscura::BACKGROUND {
+    if i == crate::BACKGROUND {
         "background".into()
     } else {
         i.to_string()

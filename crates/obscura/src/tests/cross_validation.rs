@@ -7,16 +7,16 @@
 //! two nearest polygons there have depths within `DEPTH_TIE` (relative). A scene without
 //! near ties therefore has to match on 100% of its pixels.
 
-use glam::{DMat4, DVec2, DVec3};
-use obscura::cull::backface::BackfaceMode;
-use obscura::raster::FillRule;
-use obscura::scene::random::{
+use crate::cull::backface::BackfaceMode;
+use crate::raster::FillRule;
+use crate::scene::random::{
     coplanar_grid, cyclic_triple, interpenetrating_quads, long_thin_triangles, mirrored,
     orbit_cameras, random_triangles,
 };
-use obscura::scene::{Camera, ObjectDesc, demo};
-use obscura::surface::{Algorithm, AlgorithmStats, RenderOptions, render};
-use obscura::{Frame, Lens, PrepareOptions, PreparedView, Scene, Viewport, prepare};
+use crate::scene::{Camera, ObjectDesc, demo};
+use crate::surface::{Algorithm, AlgorithmStats, RenderOptions, render};
+use crate::{Frame, Lens, PrepareOptions, PreparedView, Scene, Viewport, prepare};
+use glam::{DMat4, DVec2, DVec3};
 
 const EDGE_TIE: f64 = 1e-4;
 const DEPTH_TIE: f64 = 1e-5;
@@ -58,7 +58,7 @@ fn combine(parts: &[(Scene, DMat4)]) -> Scene {
     s
 }
 
-fn solid(mesh: obscura::scene::Mesh, t: DMat4) -> Scene {
+fn solid(mesh: crate::scene::Mesh, t: DMat4) -> Scene {
     let mut s = Scene::new();
     s.add(ObjectDesc::new("solid", mesh).with_transform(t))
         .unwrap();
@@ -290,7 +290,7 @@ fn near_tie(view: &PreparedView<'_>, i: u32, j: u32) -> bool {
 }
 
 /// Whether the algorithm draws the z-buffer's stored depth keys (so its depths must be
-/// the z-buffer's exactly, see [`obscura::view::ViewTransform::depth_of_key`]).
+/// the z-buffer's exactly, see [`crate::view::ViewTransform::depth_of_key`]).
 fn stores_keys(algorithm: Algorithm) -> bool {
     !matches!(
         algorithm,
@@ -444,7 +444,7 @@ fn the_harness_rejects_an_approximate_algorithm() {
 /// A scene on a lattice of dyadic coordinates, seen orthographically so that pixel
 /// centres fall exactly on edges and vertices: a height field of triangles sharing
 /// their edges, lattice triangles crossing it, and boxes, all inside a `w x h` window.
-fn lattice_scene(rng: &mut obscura::rng::SplitMix64, w: u32, h: u32) -> (Scene, Camera) {
+fn lattice_scene(rng: &mut crate::rng::SplitMix64, w: u32, h: u32) -> (Scene, Camera) {
     let mut pick = |n: u64| (rng.next_u64() % n) as f64;
     let mut polys: Vec<Vec<DVec3>> = Vec::new();
     let (nx, ny) = (1 + pick(6) as usize, 1 + pick(6) as usize);
@@ -481,7 +481,7 @@ fn lattice_scene(rng: &mut obscura::rng::SplitMix64, w: u32, h: u32) -> (Scene, 
         polys.push(vec![point(), point(), point()]);
     }
     let mut scene = Scene::new();
-    let mut b = obscura::scene::MeshBuilder::new();
+    let mut b = crate::scene::MeshBuilder::new();
     for p in &polys {
         let first = b.vertex_count() as u32;
         for &q in p {
@@ -521,7 +521,7 @@ fn lattice_scene(rng: &mut obscura::rng::SplitMix64, w: u32, h: u32) -> (Scene, 
 /// must show background exactly where the z-buffer does.
 #[test]
 fn split_pieces_leave_no_cracks_on_lattice_scenes() {
-    let mut rng = obscura::rng::SplitMix64(2026);
+    let mut rng = crate::rng::SplitMix64(2026);
     let sizes = [(13, 7), (16, 8), (32, 32), (31, 17), (64, 16)];
     let algorithms = [
         Algorithm::Bsp,
@@ -552,9 +552,7 @@ fn split_pieces_leave_no_cracks_on_lattice_scenes() {
             };
             split_views += usize::from(splits > 0);
             let holes: Vec<(usize, u32, u32)> = (0..z.ids.len())
-                .filter(|&i| {
-                    (z.ids[i] == obscura::BACKGROUND) != (frame.ids[i] == obscura::BACKGROUND)
-                })
+                .filter(|&i| (z.ids[i] == crate::BACKGROUND) != (frame.ids[i] == crate::BACKGROUND))
                 .map(|i| (i % w as usize, frame.ids[i], z.ids[i]))
                 .collect();
             assert!(

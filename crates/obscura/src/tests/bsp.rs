@@ -2,15 +2,15 @@
 //! viewpoints, frames equal to the z-buffer's, one tree serving many views, options,
 //! statistics and bad input.
 
+use crate::accel::bsp::{BspOptions, BspTraversal, BspTree, Viewpoint};
+use crate::geom::polygon_area;
+use crate::rng::SplitMix64;
+use crate::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport, demo};
+use crate::surface::{RenderOptions, bsp};
+use crate::{BACKGROUND, PreparedView};
 use glam::{DMat4, DVec3};
-use obscura::accel::bsp::{BspOptions, BspTraversal, BspTree, Viewpoint};
-use obscura::geom::polygon_area;
-use obscura::rng::SplitMix64;
-use obscura::scene::{Camera, MeshBuilder, ObjectDesc, Scene, Viewport, demo};
-use obscura::surface::{RenderOptions, bsp};
-use obscura::{BACKGROUND, PreparedView};
 
-mod hsr_scenes;
+use super::hsr_scenes;
 use hsr_scenes::{assert_like_zbuffer, polygon_object, random_triangle_objects, view};
 
 fn options(traversal: BspTraversal) -> RenderOptions {
@@ -248,7 +248,7 @@ fn small_scenes_far_from_the_world_origin() {
     let d = eye.distance(target);
     let c = Camera::perspective(eye, target, DVec3::Z, 0.01, d / 100.0, d * 100.0);
     let v = view(&scene, &c, 64, 48);
-    let (z, _) = obscura::surface::zbuffer::render(&v, &RenderOptions::default()).unwrap();
+    let (z, _) = crate::surface::zbuffer::render(&v, &RenderOptions::default()).unwrap();
     assert!(
         z.ids.iter().all(|&id| id == 0),
         "the triangle fills the view"
@@ -630,8 +630,10 @@ fn tolerances_beyond_a_thousandth_of_the_scale_are_refused() {
         (-1e-9, false),
         (f64::NAN, false),
     ] {
-        let mut options = BspOptions::default();
-        options.tolerance = tolerance;
+        let options = BspOptions {
+            tolerance,
+            ..BspOptions::default()
+        };
         assert_eq!(options.validate().is_ok(), ok, "{tolerance}");
         assert_eq!(BspTree::build(&scene, &options).is_ok(), ok, "{tolerance}");
     }
@@ -745,12 +747,12 @@ fn pieces_cut_by_a_plane_seen_edge_on_keep_the_order() {
         .with_weights(8.0, 1.0)
         .with_score_sample(2048)
         .with_axis_planes(true);
-    let vp = obscura::Viewport::new(32, 32).unwrap();
-    let prep = obscura::PrepareOptions::default()
-        .with_backface(obscura::cull::backface::BackfaceMode::Closed);
-    let view = obscura::prepare(&scene, &camera, vp, &prep).unwrap();
-    let (z, _) = obscura::surface::render(
-        obscura::surface::Algorithm::ZBuffer,
+    let vp = crate::Viewport::new(32, 32).unwrap();
+    let prep =
+        crate::PrepareOptions::default().with_backface(crate::cull::backface::BackfaceMode::Closed);
+    let view = crate::prepare(&scene, &camera, vp, &prep).unwrap();
+    let (z, _) = crate::surface::render(
+        crate::surface::Algorithm::ZBuffer,
         &view,
         &RenderOptions::default(),
     )

@@ -4,17 +4,17 @@
 
 use std::collections::HashMap;
 
+use crate::cull::backface::BackfaceMode;
+use crate::geom::polygon_area;
+use crate::rng::SplitMix64;
+use crate::scene::{Camera, ObjectDesc, Scene, Viewport, demo};
+use crate::surface::depth_sort::{self, PaintOrder, paint_order, paint_order_matrix};
+use crate::surface::stats::{AlgorithmStats, DepthSortMatrixStats, DepthSortStats};
+use crate::surface::{Algorithm, RenderOptions, render};
+use crate::{BACKGROUND, PrepareOptions, PreparedView, Stats, prepare};
 use glam::DVec3;
-use obscura::cull::backface::BackfaceMode;
-use obscura::geom::polygon_area;
-use obscura::rng::SplitMix64;
-use obscura::scene::{Camera, ObjectDesc, Scene, Viewport, demo};
-use obscura::surface::depth_sort::{self, PaintOrder, paint_order, paint_order_matrix};
-use obscura::surface::stats::{AlgorithmStats, DepthSortMatrixStats, DepthSortStats};
-use obscura::surface::{Algorithm, RenderOptions, render};
-use obscura::{BACKGROUND, PrepareOptions, PreparedView, Stats, prepare};
 
-mod hsr_scenes;
+use super::hsr_scenes;
 use hsr_scenes::{assert_like_zbuffer, polygon_object, random_triangle_objects, view};
 
 const VARIANTS: [Algorithm; 2] = [Algorithm::DepthSort, Algorithm::DepthSortMatrix];
@@ -555,7 +555,7 @@ fn empty_and_degenerate_input_gives_background() {
 /// were wrong before the fallback).
 #[test]
 fn conflicts_left_past_the_split_budget_still_give_the_zbuffer_image() {
-    let scene = obscura::scene::random::interpenetrating_quads(30, 9, 1.0);
+    let scene = crate::scene::random::interpenetrating_quads(30, 9, 1.0);
     let v = view(&scene, &scene.default_camera(1.0), 256, 256);
     for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
         let (frame, stats) = render(algorithm, &v, &RenderOptions::default()).unwrap();
@@ -568,7 +568,7 @@ fn conflicts_left_past_the_split_budget_still_give_the_zbuffer_image() {
 /// budget the rest is painted depth-tested (this case ran for minutes before).
 #[test]
 fn thousands_of_slivers_stop_sorting_at_the_comparison_budget() {
-    let scene = obscura::scene::random::long_thin_triangles(3000, 9, 1.0);
+    let scene = crate::scene::random::long_thin_triangles(3000, 9, 1.0);
     let v = view(&scene, &scene.default_camera(1.0), 256, 256);
     for algorithm in [Algorithm::DepthSort, Algorithm::DepthSortMatrix] {
         let (frame, stats) = render(algorithm, &v, &RenderOptions::default()).unwrap();
@@ -587,7 +587,7 @@ fn thousands_of_slivers_stop_sorting_at_the_comparison_budget() {
 /// touching, and 24 pixels of this scene came out wrong without any split.
 #[test]
 fn a_far_unused_vertex_does_not_widen_the_tolerance() {
-    use obscura::scene::MeshBuilder;
+    use crate::scene::MeshBuilder;
     let mesh = |far: f64, tris: &[[[f64; 3]; 3]]| {
         let mut b = MeshBuilder::new();
         b.push_position(DVec3::new(far, 0.0, 0.0));

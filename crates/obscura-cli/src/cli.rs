@@ -1,0 +1,30 @@
+//! The command line's definition: its subcommands and their arguments (parsed by clap).
+//! One definition for the binary (`main.rs`) and the `cli_args` fuzz target, which
+//! compiles this file by path.
+
+use clap::{Parser, Subcommand};
+
+use crate::{bench, compare, render};
+
+/// What can be seen? Clipping, culling and hidden-surface removal, every classical
+/// algorithm behind one interface.
+#[derive(Parser, Debug)]
+#[command(name = "obscura", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene to a PNG (and optionally face ids and depths as NumPy arrays).
+    #[command(after_help = render::EXAMPLES)]
+    Render(render::RenderArgs),
+    /// Render with every algorithm (or a list), compare each to the z-buffer, and write a
+    /// grid of pictures and difference masks.
+    #[command(after_help = compare::EXAMPLES)]
+    Compare(compare::CompareArgs),
+    /// Time each algorithm over a sweep of face counts and fit the growth exponent.
+    #[command(after_help = bench::EXAMPLES)]
+    Bench(bench::BenchArgs),
+}

@@ -1,0 +1,15 @@
+//! The hidden-surface and structure tests that look inside the crate (SIMD kernels, BVH
+//! packets and traversal, the random scene generators, the RNG): once integration tests
+//! under `tests/`, which made those internals public only to be named. Each file is
+//! the suite it was, assertion for assertion; `tests/` keeps what a user can do with
+//! the public API.
+
+mod bsp;
+mod budget;
+mod cross_validation;
+mod depth_sort;
+mod hsr_scenes;
+mod octree;
+mod raycast;
+mod scanline;
+mod warnock;
