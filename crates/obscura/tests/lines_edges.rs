@@ -90,6 +90,24 @@ fn cube_has_twelve_creases_and_six_silhouettes_from_a_corner() {
         let steep = creases.with_crease_degrees(95.0);
         assert!(edges(&scene, &camera, &steep).is_empty());
     }
+    // A mirrored cube (winding flipped by the transform) has the same silhouettes.
+    let mut mirrored = Scene::new();
+    mirrored
+        .add(
+            ObjectDesc::new(
+                "mirror",
+                demo::box_mesh(DVec3::splat(-0.5), DVec3::splat(0.5)),
+            )
+            .with_transform(glam::DMat4::from_scale(DVec3::new(-1.0, 1.0, 1.0))),
+        )
+        .unwrap();
+    let camera = persp(DVec3::new(2.0, 1.5, 3.0));
+    let far = far_corner(camera.eye);
+    let e = edges(&mirrored, &camera, &EdgeOptions::default());
+    assert_eq!(count(&e, EdgeKind::Silhouette), 6);
+    for e in e.iter().filter(|e| e.kind == EdgeKind::Silhouette) {
+        assert!(!e.world.iter().any(|&p| p == far || p == -far), "{e:?}");
+    }
     // Head-on: the four edges of the front face are silhouettes (the side faces are
     // edge-on in orthographic, facing away in perspective), the other 8 creases.
     for camera in [persp(DVec3::Z * 4.0), ortho(DVec3::Z * 4.0)] {
@@ -183,6 +201,31 @@ fn planar_faces_draw_no_diagonal() {
         (6, 6),
         "{all:?}"
     );
+}
+
+#[test]
+fn non_manifold_edges_are_boundaries() {
+    // Three triangles on one edge (a book of three pages): the spine is drawn once,
+    // as a boundary, with the other six edges.
+    let p = [
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(-0.5, 0.0, 0.8),
+        DVec3::new(-0.5, 0.0, -0.8),
+    ];
+    let scene = scene_of(vec![mesh(&p, &[&[0, 2, 1], &[0, 1, 3], &[0, 1, 4]])]);
+    let e = edges(
+        &scene,
+        &persp(DVec3::new(1.0, 2.0, 3.0)),
+        &EdgeOptions::default(),
+    );
+    assert_eq!((e.len(), count(&e, EdgeKind::Boundary)), (7, 7), "{e:?}");
+    let spine = e
+        .iter()
+        .filter(|e| e.world == [p[0], p[1]])
+        .collect::<Vec<_>>();
+    assert_eq!(spine.len(), 1);
 }
 
 #[test]
@@ -305,6 +348,21 @@ fn two_triangles_cross_along_their_analytic_segment() {
     assert!(hi.distance(DVec3::new(0.5, 1.5, 0.0)) < 1e-14, "{hi}");
     assert_eq!(e[0].faces, [Some(0), Some(1)]);
     assert_eq!((e[0].object, e[0].vertices), (Some(0), None));
+    // The same two triangles in one object cross along the same segment.
+    let one = scene_of(vec![mesh(
+        &[
+            DVec3::ZERO,
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+            DVec3::new(0.5, -1.0, -1.0),
+            DVec3::new(0.5, 3.0, -1.0),
+            DVec3::new(0.5, -1.0, 3.0),
+        ],
+        &[&[0, 1, 2], &[3, 4, 5]],
+    )]);
+    let self_crossing = edges(&one, &camera, &only);
+    assert_eq!(self_crossing.len(), 1);
+    assert_eq!(self_crossing[0].world, e[0].world);
     // Computed once per scene.
     assert!(std::ptr::eq(
         index.intersection_lines(),

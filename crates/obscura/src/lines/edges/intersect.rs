@@ -93,16 +93,32 @@ pub fn triangle_intersection(t1: &[DVec3; 3], t2: &[DVec3; 3]) -> Option<[DVec3;
     if shared >= 2 {
         return None;
     }
+    // Nothing but a point (or nothing) when no vertex is strictly on each side and at
+    // most one lies on the plane; coplanar triangles (all on the plane) give nothing.
     let side = |o: [f64; 3]| {
-        (o[0] > 0.0 && o[1] > 0.0 && o[2] > 0.0)
-            || (o[0] < 0.0 && o[1] < 0.0 && o[2] < 0.0)
-            || o == [0.0; 3]
+        let zeros = o.iter().filter(|&&x| x == 0.0).count();
+        let crosses = o.iter().any(|&x| x > 0.0) && o.iter().any(|&x| x < 0.0);
+        zeros == 3 || (!crosses && zeros <= 1)
     };
-    let o2 = t2.map(|p| orient3d(t1[0], t1[1], t1[2], p));
+    // A shared vertex lies exactly on the other's plane: its orientation is 0 without
+    // asking `orient3d`, whose exact (slow) path every zero would take.
+    let o2 = t2.map(|p| {
+        if t1.contains(&p) {
+            0.0
+        } else {
+            orient3d(t1[0], t1[1], t1[2], p)
+        }
+    });
     if side(o2) {
         return None;
     }
-    let o1 = t1.map(|p| orient3d(t2[0], t2[1], t2[2], p));
+    let o1 = t1.map(|p| {
+        if t2.contains(&p) {
+            0.0
+        } else {
+            orient3d(t2[0], t2[1], t2[2], p)
+        }
+    });
     if side(o1) {
         return None;
     }
