@@ -26,7 +26,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
-use crate::accel::bvh::{Bvh, Slot, WIDTH};
+use crate::accel::bvh::{Bvh, Slot, WIDTH, f32_down, f32_up};
 use crate::geom::Aabb;
 
 /// A segment where two polygons of the scene cross (view independent).
@@ -180,19 +180,24 @@ fn crossings_of(bvh: &Bvh, i: usize, stack: &mut Vec<u32>, out: &mut Vec<(u32, u
     let polys = bvh.triangle_polygons();
     let t = &tris[i];
     let b = triangle_box(t);
+    // The query box in single precision, rounded outwards, against the nodes' boxes
+    // as stored (empty slots have `+inf` corners and never overlap).
+    let lo = [f32_down(b.min.x), f32_down(b.min.y), f32_down(b.min.z)];
+    let hi = [f32_up(b.max.x), f32_up(b.max.y), f32_up(b.max.z)];
     stack.clear();
     stack.push(0);
     while let Some(n) = stack.pop() {
         let node = bvh.node(n);
         for k in 0..WIDTH {
-            let slot = node.slot(k);
-            if slot == Slot::Empty || !overlaps(&node.slot_box(k), &b) {
+            let overlap = (0..3).all(|a| node.min[a][k] <= hi[a] && lo[a] <= node.max[a][k]);
+            if !overlap {
                 continue;
             }
-            match slot {
+            match node.slot(k) {
                 Slot::Node(c) => stack.push(c),
                 Slot::Leaf { first, count } => {
-                    for j in (first as usize..(first + count) as usize).filter(|&j| j > i) {
+                    let start = (first as usize).max(i + 1);
+                    for j in start..(first + count) as usize {
                         if polys[j] == polys[i] || !overlaps(&triangle_box(&tris[j]), &b) {
                             continue;
                         }
