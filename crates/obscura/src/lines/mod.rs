@@ -16,6 +16,7 @@
 //! A [`Drawing`] is independent of its output: [`svg`] writes it for people and pen
 //! plotters (layers, millimetres on a page, joined and ordered polylines).
 
+pub mod check;
 mod drawing;
 pub mod edges;
 pub mod hlr;
