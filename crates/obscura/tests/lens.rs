@@ -6,7 +6,7 @@
 //! inputs written here.
 
 use glam::{DMat4, DVec2, DVec3, DVec4};
-use obscura::rng::SplitMix64;
+use obscura::bench_support::SplitMix64;
 use obscura::scene::{Faces, Intrinsics};
 use obscura::{
     Algorithm, Camera, Error, Frame, Lens, PrepareOptions, PreparedView, Projection, RenderOptions,
