@@ -467,6 +467,10 @@ impl Run<'_> {
             envelope::above(&self.lower, neg(p), neg(q), &mut self.low_iv);
             union(&self.up_iv, &self.low_iv, &mut self.vis);
         }
+        let length = p.distance(q);
+        if length > 0.0 {
+            drop_slivers(&mut self.vis, MIN_PIECE / length);
+        }
         let nx = self.field.nx;
         let edge = u32::try_from(self.drawing.edges.len())
             .map_err(|_| self.budget.exceeded(EDGES, u64::MAX, u64::MAX))?;
@@ -556,6 +560,38 @@ impl Run<'_> {
     }
 }
 
+/// The shortest piece drawn, in pixels: `1e-6`. A segment that starts on the horizon
+/// (a segment of constant `x` starts on the curve before it) rises above it only past
+/// [`envelope::ABOVE_TOLERANCE`]; without this it would begin with a hidden sliver a
+/// billionth of a pixel long.
+pub const MIN_PIECE: f64 = 1e-6;
+
+/// Joins visible intervals (of `s` in `[0, 1]`) separated by less than `min`, extends
+/// them to the segment's ends when they stop short of them by less than `min`, then
+/// drops those shorter than `min`.
+fn drop_slivers(vis: &mut Vec<[f64; 2]>, min: f64) {
+    if vis.is_empty() {
+        return;
+    }
+    let mut w = 0;
+    for r in 1..vis.len() {
+        if vis[r][0] - vis[w][1] < min {
+            vis[w][1] = vis[r][1];
+        } else {
+            w += 1;
+            vis[w] = vis[r];
+        }
+    }
+    vis.truncate(w + 1);
+    if vis[0][0] < min {
+        vis[0][0] = 0.0;
+    }
+    if 1.0 - vis[w][1] < min {
+        vis[w][1] = 1.0;
+    }
+    vis.retain(|iv| iv[1] - iv[0] >= min);
+}
+
 /// The union of two sorted lists of disjoint intervals, into `out`.
 fn union(a: &[[f64; 2]], b: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
     let (mut i, mut j) = (0, 0);
@@ -577,6 +613,18 @@ fn union(a: &[[f64; 2]], b: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn slivers_are_joined_and_dropped() {
+        let mut v = vec![
+            [1e-9, 0.3],
+            [0.3 + 1e-9, 0.5],
+            [0.7, 0.7 + 1e-9],
+            [0.8, 1.0 - 1e-9],
+        ];
+        drop_slivers(&mut v, 1e-6);
+        assert_eq!(v, vec![[0.0, 0.5], [0.8, 1.0]]);
+    }
 
     #[test]
     fn union_joins_overlaps() {
