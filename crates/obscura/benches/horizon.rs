@@ -22,11 +22,21 @@ fn horizon(c: &mut Criterion) {
         for (label, curves) in [("z", Curves::ConstantZ), ("both", Curves::Both)] {
             let options = HorizonOptions::default().with_curves(curves);
             let (d, s) = draw(&field, &camera, vp, &options).unwrap();
+            // CPU time per draw, read from the kernel's accounting: wall-clock times of
+            // a shared machine overstate it.
+            let runs = 10;
+            let before = cpu_seconds();
+            for _ in 0..runs {
+                black_box(draw(&field, &camera, vp, &options).unwrap());
+            }
+            let per_draw = (cpu_seconds() - before) / f64::from(runs);
             eprintln!(
-                "{name}/{label}: {} edges, {} visible pieces, horizon up to {} spans",
+                "{name}/{label}: {} edges, {} visible pieces, horizon up to {} spans; \
+                 {:.0} ms of CPU time per draw",
                 d.edges.len(),
                 s.visible_pieces,
-                s.horizon_spans
+                s.horizon_spans,
+                per_draw * 1e3
             );
             g.bench_function(format!("{name}/{label}"), |b| {
                 b.iter(|| draw(black_box(&field), &camera, vp, &options).unwrap())
@@ -34,6 +44,24 @@ fn horizon(c: &mut Criterion) {
         }
     }
     g.finish();
+}
+
+/// User plus system CPU time of this process so far, in seconds (Linux; 0 elsewhere),
+/// at the kernel's clock-tick resolution (usually 10 ms).
+fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    // Fields after the command name (which ends with ')'): utime is the 12th, stime
+    // the 13th.
+    let rest = stat.rsplit_once(')').map_or("", |r| r.1);
+    let f: Vec<f64> = rest
+        .split_whitespace()
+        .skip(11)
+        .take(2)
+        .filter_map(|v| v.parse().ok())
+        .collect();
+    f.iter().sum::<f64>() / 100.0
 }
 
 criterion_group!(benches, horizon);

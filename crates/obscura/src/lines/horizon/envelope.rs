@@ -119,6 +119,15 @@ pub const ABOVE_TOLERANCE: f64 = 1e-9;
 /// A segment with `p.x == q.x` is tested at that one column against the larger of the
 /// envelope's values there (a jump counts at its top).
 pub fn above(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>) {
+    let mut hint = 0;
+    above_from(env, p, q, out, &mut hint);
+}
+
+/// [`above`], starting the search for the first span the segment meets at `*hint` (the
+/// span where the previous segment of a curve ended), and leaving there the span where
+/// this one ends: consecutive segments of a curve drawn left to right then cost no
+/// search. A wrong hint costs a binary search.
+pub fn above_from(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>, hint: &mut usize) {
     // Lowering the segment by the tolerance tests "above by more than the tolerance".
     let (p, q) = (
         DVec2::new(p.x, p.y - ABOVE_TOLERANCE),
@@ -152,7 +161,7 @@ pub fn above(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>) {
     let frac = |x: f64| ((x - seg.x0) / width).clamp(0.0, 1.0);
     let start = out.len();
     // `u` in [0, 1] runs left to right; converted to `s` at the end.
-    let mut k = env.partition_point(|e| e.x1 <= seg.x0);
+    let mut k = first_span(env, seg.x0, *hint);
     let mut x = seg.x0;
     while x < seg.x1 {
         if k < env.len() && env[k].x0 <= x {
@@ -188,12 +197,30 @@ pub fn above(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>) {
             x = xq;
         }
     }
+    *hint = k.min(env.len());
     if flip {
         out[start..].reverse();
         for iv in &mut out[start..] {
             *iv = [1.0 - iv[1], 1.0 - iv[0]];
         }
     }
+}
+
+/// The first span of `env` that ends after `x` (`env.len()` if none), looked for from
+/// `hint` forward a few spans, then by binary search.
+#[inline]
+fn first_span(env: &[Span], x: f64, hint: usize) -> usize {
+    let ok_before = |k: usize| k == 0 || env[k - 1].x1 <= x;
+    if hint <= env.len() && ok_before(hint) {
+        let mut k = hint;
+        for _ in 0..8 {
+            if k == env.len() || env[k].x1 > x {
+                return k;
+            }
+            k += 1;
+        }
+    }
+    env.partition_point(|e| e.x1 <= x)
 }
 
 /// The envelope's largest value at `x` (at a jump, the top of it), or `None` where it
@@ -236,6 +263,34 @@ impl Builder<'_> {
     }
 }
 
+/// A span being swept: its value at the sweep's position is carried from step to step
+/// and advanced with its slope, computed once.
+#[derive(Clone, Copy)]
+struct Cursor {
+    span: Span,
+    slope: f64,
+}
+
+impl Cursor {
+    #[inline(always)]
+    fn new(span: Span) -> Self {
+        Cursor {
+            span,
+            slope: (span.y1 - span.y0) / (span.x1 - span.x0),
+        }
+    }
+
+    /// The value at `x` in `[x0, x1]`; exact at the right end.
+    #[inline(always)]
+    fn at(&self, x: f64) -> f64 {
+        if x >= self.span.x1 {
+            self.span.y1
+        } else {
+            self.span.y0 + self.slope * (x - self.span.x0)
+        }
+    }
+}
+
 /// The upper envelope of two envelopes (`max` where both are defined, either one where
 /// only it is), written to `out` (cleared first): one left-to-right sweep over the
 /// breakpoints of both, `O(|a| + |b|)`. Where they cross, the crossing comes from
@@ -254,10 +309,16 @@ pub fn merge(a: &[Span], b: &[Span], out: &mut Vec<Span>) {
         (None, Some(q)) => q.x0,
         (None, None) => return,
     };
+    // The active spans' cursors and values at x (valid when active).
+    let mut ca = a.first().map(|s| Cursor::new(*s));
+    let mut cb = b.first().map(|s| Cursor::new(*s));
+    let (mut ya, mut yb) = (
+        a.first().map_or(0.0, |s| s.y0),
+        b.first().map_or(0.0, |s| s.y0),
+    );
     while i < a.len() || j < b.len() {
         let a_on = i < a.len() && a[i].x0 <= x;
         let b_on = j < b.len() && b[j].x0 <= x;
-        // The next breakpoint of either envelope after x.
         let na = if i < a.len() {
             if a_on { a[i].x1 } else { a[i].x0 }
         } else {
@@ -272,43 +333,79 @@ pub fn merge(a: &[Span], b: &[Span], out: &mut Vec<Span>) {
         match (a_on, b_on) {
             (false, false) => {}
             (true, false) => {
-                let s = a[i];
-                bld.emit((0, i), x, s.at(x), q, s.at(q));
+                let c = ca.as_ref().unwrap_or_else(|| unreachable!());
+                let y1 = c.at(q);
+                bld.emit((0, i), x, ya, q, y1);
+                ya = y1;
             }
             (false, true) => {
-                let s = b[j];
-                bld.emit((1, j), x, s.at(x), q, s.at(q));
+                let c = cb.as_ref().unwrap_or_else(|| unreachable!());
+                let y1 = c.at(q);
+                bld.emit((1, j), x, yb, q, y1);
+                yb = y1;
             }
             (true, true) => {
-                let (sa, sb) = (a[i], b[j]);
-                let (ya0, ya1, yb0, yb1) = (sa.at(x), sa.at(q), sb.at(x), sb.at(q));
-                let (d0, d1) = (ya0 - yb0, ya1 - yb1);
+                let (pa, pb) = (
+                    ca.as_ref().unwrap_or_else(|| unreachable!()),
+                    cb.as_ref().unwrap_or_else(|| unreachable!()),
+                );
+                let (ya1, yb1) = (pa.at(q), pb.at(q));
+                let (d0, d1) = (ya - yb, ya1 - yb1);
                 if d0 >= 0.0 && d1 >= 0.0 {
-                    bld.emit((0, i), x, ya0, q, ya1);
+                    bld.emit((0, i), x, ya, q, ya1);
                 } else if d0 <= 0.0 && d1 <= 0.0 {
-                    bld.emit((1, j), x, yb0, q, yb1);
+                    bld.emit((1, j), x, yb, q, yb1);
                 } else {
-                    let lam = crossing_fraction(ya0, ya1 - ya0, yb0, yb1 - yb0).unwrap_or(0.5);
+                    let lam = crossing_fraction(ya, ya1 - ya, yb, yb1 - yb).unwrap_or(0.5);
                     let xc = (x + (q - x) * lam).clamp(x, q);
-                    let yc = ya0 + (ya1 - ya0) * lam;
+                    let yc = ya + (ya1 - ya) * lam;
                     if d0 > 0.0 {
-                        bld.emit((0, i), x, ya0, xc, yc);
+                        bld.emit((0, i), x, ya, xc, yc);
                         bld.emit((1, j), xc, yc, q, yb1);
                     } else {
-                        bld.emit((1, j), x, yb0, xc, yc);
+                        bld.emit((1, j), x, yb, xc, yc);
                         bld.emit((0, i), xc, yc, q, ya1);
                     }
                 }
+                ya = ya1;
+                yb = yb1;
             }
         }
         if a_on && a[i].x1 <= q {
             i += 1;
+            if let Some(s) = a.get(i) {
+                ca = Some(Cursor::new(*s));
+                ya = s.y0;
+            }
         }
         if b_on && b[j].x1 <= q {
             j += 1;
+            if let Some(s) = b.get(j) {
+                cb = Some(Cursor::new(*s));
+                yb = s.y0;
+            }
+        }
+        // A span that starts at q (after a gap) starts at its own left value.
+        if !a_on && i < a.len() && a[i].x0 <= q {
+            ya = a[i].y0;
+        }
+        if !b_on && j < b.len() && b[j].x0 <= q {
+            yb = b[j].y0;
         }
         x = q;
     }
+}
+
+/// Merges the envelope `b` into `env` in place ([`merge`] restricted to the spans of
+/// `env` that `b`'s range reaches; the others are kept as they are), using `tmp`.
+pub fn merge_into(env: &mut Vec<Span>, b: &[Span], tmp: &mut Vec<Span>) {
+    let (Some(first), Some(last)) = (b.first(), b.last()) else {
+        return;
+    };
+    let lo = env.partition_point(|e| e.x1 <= first.x0);
+    let hi = lo + env[lo..].partition_point(|e| e.x0 < last.x1);
+    merge(&env[lo..hi], b, tmp);
+    env.splice(lo..hi, tmp.drain(..));
 }
 
 /// The upper envelope of any spans (not sorted, possibly overlapping), into `out`:
@@ -448,6 +545,35 @@ mod tests {
         above(&env, DVec2::new(2., 0.), DVec2::new(2., 4.), &mut v);
         assert_eq!(v.len(), 1);
         assert!((v[0][0] - 0.5).abs() < 1e-8 && v[0][1] == 1.0, "{v:?}");
+    }
+
+    #[test]
+    fn merging_in_place_equals_merging_whole() {
+        let mut rng = crate::rng::SplitMix64(11);
+        let mut random_env = |n: usize, from: f64, to: f64| {
+            let mut xs: Vec<f64> = (0..2 * n).map(|_| rng.range(from, to)).collect();
+            xs.sort_by(f64::total_cmp);
+            xs.chunks(2)
+                .filter(|c| c[0] < c[1])
+                .map(|c| span(c[0], rng.range(0.0, 5.0), c[1], rng.range(0.0, 5.0)))
+                .collect::<Vec<_>>()
+        };
+        for _ in 0..200 {
+            let env = random_env(20, 0.0, 100.0);
+            let b = random_env(6, 30.0, 60.0);
+            let (mut whole, mut tmp) = (Vec::new(), Vec::new());
+            merge(&env, &b, &mut whole);
+            let mut part = env.clone();
+            merge_into(&mut part, &b, &mut tmp);
+            for k in 0..=1000 {
+                let x = f64::from(k) * 0.1;
+                let (p, w) = (value_max(&part, x), value_max(&whole, x));
+                assert_eq!(p.is_some(), w.is_some(), "x {x}");
+                if let (Some(p), Some(w)) = (p, w) {
+                    assert!((p - w).abs() < 1e-9, "x {x}: {p} vs {w}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -295,6 +295,7 @@ pub fn draw(
         up_iv: Vec::new(),
         low_iv: Vec::new(),
         vis: Vec::new(),
+        hints: [0, 0],
         drawing,
         stats,
     };
@@ -395,6 +396,8 @@ struct Run<'a> {
     up_iv: Vec<[f64; 2]>,
     low_iv: Vec<[f64; 2]>,
     vis: Vec<[f64; 2]>,
+    /// Where the last segment ended in the upper and the lower horizon.
+    hints: [usize; 2],
     drawing: Drawing,
     stats: HorizonStats,
 }
@@ -439,12 +442,10 @@ impl Run<'_> {
             }));
         }
         envelope::envelope_of(&mut self.batch, &mut self.batch_env, &mut self.scratch);
-        envelope::merge(&self.upper, &self.batch_env, &mut self.merged);
-        std::mem::swap(&mut self.upper, &mut self.merged);
+        envelope::merge_into(&mut self.upper, &self.batch_env, &mut self.merged);
         if !ridgeline {
             envelope::envelope_of(&mut negated, &mut self.batch_env, &mut self.scratch);
-            envelope::merge(&self.lower, &self.batch_env, &mut self.merged);
-            std::mem::swap(&mut self.lower, &mut self.merged);
+            envelope::merge_into(&mut self.lower, &self.batch_env, &mut self.merged);
         }
         self.negated = negated;
         let spans = self.upper.len().max(self.lower.len()) as u64;
@@ -457,14 +458,21 @@ impl Run<'_> {
     /// Draws one segment: its visible parts (and hidden ones when asked) as pieces.
     fn segment(&mut self, a: usize, b: usize, p: DVec2, q: DVec2) -> Result<()> {
         self.up_iv.clear();
-        envelope::above(&self.upper, p, q, &mut self.up_iv);
+        envelope::above_from(&self.upper, p, q, &mut self.up_iv, &mut self.hints[0]);
         self.vis.clear();
-        if self.options.ridgeline {
+        if self.options.ridgeline || self.up_iv == [[0.0, 1.0]] {
+            // Wholly above the upper horizon: the lower one cannot add to it.
             self.vis.extend_from_slice(&self.up_iv);
         } else {
             self.low_iv.clear();
             let neg = |v: DVec2| DVec2::new(v.x, -v.y);
-            envelope::above(&self.lower, neg(p), neg(q), &mut self.low_iv);
+            envelope::above_from(
+                &self.lower,
+                neg(p),
+                neg(q),
+                &mut self.low_iv,
+                &mut self.hints[1],
+            );
             union(&self.up_iv, &self.low_iv, &mut self.vis);
         }
         let length = p.distance(q);
