@@ -126,8 +126,15 @@ pub fn above(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>) {
 /// [`above`], starting the search for the first span the segment meets at `*hint` (the
 /// span where the previous segment of a curve ended), and leaving there the span where
 /// this one ends: consecutive segments of a curve drawn left to right then cost no
-/// search. A wrong hint costs a binary search.
-pub fn above_from(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>, hint: &mut usize) {
+/// search. A wrong hint costs a binary search. Returns whether some part of the segment
+/// lies where the envelope is not defined.
+pub fn above_from(
+    env: &[Span],
+    p: DVec2,
+    q: DVec2,
+    out: &mut Vec<[f64; 2]>,
+    hint: &mut usize,
+) -> bool {
     // Lowering the segment by the tolerance tests "above by more than the tolerance".
     let (p, q) = (
         DVec2::new(p.x, p.y - ABOVE_TOLERANCE),
@@ -136,7 +143,7 @@ pub fn above_from(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>, hin
     if p.x == q.x {
         let Some(top) = value_max(env, p.x) else {
             out.push([0.0, 1.0]);
-            return;
+            return true;
         };
         let (d0, d1) = (p.y - top, q.y - top);
         if d0 > 0.0 && d1 > 0.0 {
@@ -146,7 +153,7 @@ pub fn above_from(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>, hin
         } else if d1 > 0.0 {
             push_interval(out, d0 / (d0 - d1), 1.0);
         }
-        return;
+        return false;
     }
     // Walk the segment left to right; `s` of an x follows the segment's direction.
     let flip = p.x > q.x;
@@ -163,6 +170,7 @@ pub fn above_from(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>, hin
     // `u` in [0, 1] runs left to right; converted to `s` at the end.
     let mut k = first_span(env, seg.x0, *hint);
     let mut x = seg.x0;
+    let mut outside = false;
     while x < seg.x1 {
         if k < env.len() && env[k].x0 <= x {
             let e = env[k];
@@ -194,6 +202,7 @@ pub fn above_from(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>, hin
                 seg.x1
             };
             push_interval(out, frac(x), frac(xq));
+            outside = true;
             x = xq;
         }
     }
@@ -204,6 +213,7 @@ pub fn above_from(env: &[Span], p: DVec2, q: DVec2, out: &mut Vec<[f64; 2]>, hin
             *iv = [1.0 - iv[1], 1.0 - iv[0]];
         }
     }
+    outside
 }
 
 /// The first span of `env` that ends after `x` (`env.len()` if none), looked for from

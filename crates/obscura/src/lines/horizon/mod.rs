@@ -296,6 +296,7 @@ pub fn draw(
         low_iv: Vec::new(),
         vis: Vec::new(),
         hints: [0, 0],
+        raise: [true, true],
         drawing,
         stats,
     };
@@ -398,6 +399,8 @@ struct Run<'a> {
     vis: Vec<[f64; 2]>,
     /// Where the last segment ended in the upper and the lower horizon.
     hints: [usize; 2],
+    /// Whether the batch being drawn changes the upper and the lower horizon.
+    raise: [bool; 2],
     drawing: Drawing,
     stats: HorizonStats,
 }
@@ -407,6 +410,8 @@ impl Run<'_> {
     /// when `draw` is set, then takes them into the horizons.
     fn group(&mut self, segments: impl Iterator<Item = (usize, usize)>, draw: bool) -> Result<()> {
         self.batch.clear();
+        // Undrawn segments are not tested: they always join the horizons.
+        self.raise = [!draw, !draw];
         for (a, b) in segments {
             let (p, q) = (self.pts[a], self.pts[b]);
             if draw {
@@ -434,16 +439,18 @@ impl Run<'_> {
         let ridgeline = self.options.ridgeline;
         let mut negated = std::mem::take(&mut self.negated);
         negated.clear();
-        if !ridgeline {
+        if !ridgeline && self.raise[1] {
             negated.extend(self.batch.iter().map(|s| Span {
                 y0: -s.y0,
                 y1: -s.y1,
                 ..*s
             }));
         }
-        envelope::envelope_of(&mut self.batch, &mut self.batch_env, &mut self.scratch);
-        envelope::merge_into(&mut self.upper, &self.batch_env, &mut self.merged);
-        if !ridgeline {
+        if self.raise[0] {
+            envelope::envelope_of(&mut self.batch, &mut self.batch_env, &mut self.scratch);
+            envelope::merge_into(&mut self.upper, &self.batch_env, &mut self.merged);
+        }
+        if !ridgeline && self.raise[1] {
             envelope::envelope_of(&mut negated, &mut self.batch_env, &mut self.scratch);
             envelope::merge_into(&mut self.lower, &self.batch_env, &mut self.merged);
         }
@@ -458,7 +465,14 @@ impl Run<'_> {
     /// Draws one segment: its visible parts (and hidden ones when asked) as pieces.
     fn segment(&mut self, a: usize, b: usize, p: DVec2, q: DVec2) -> Result<()> {
         self.up_iv.clear();
-        envelope::above_from(&self.upper, p, q, &mut self.up_iv, &mut self.hints[0]);
+        let outside = envelope::above_from(&self.upper, p, q, &mut self.up_iv, &mut self.hints[0]);
+        // A segment that is nowhere above the upper horizon (by more than the tolerance)
+        // and nowhere outside it leaves it as it is; likewise for the lower one. The
+        // horizons have the same extent (they take in the same segments), and the upper
+        // lies above the lower, so a segment wholly above the upper one is not below the
+        // lower one.
+        self.raise[0] |= !self.up_iv.is_empty();
+        self.raise[1] |= outside;
         self.vis.clear();
         if self.options.ridgeline || self.up_iv == [[0.0, 1.0]] {
             // Wholly above the upper horizon: the lower one cannot add to it.
@@ -473,6 +487,7 @@ impl Run<'_> {
                 &mut self.low_iv,
                 &mut self.hints[1],
             );
+            self.raise[1] |= !self.low_iv.is_empty();
             union(&self.up_iv, &self.low_iv, &mut self.vis);
         }
         let length = p.distance(q);
