@@ -218,6 +218,7 @@ fn crossing_formula_on_worked_numbers() {
 #[test]
 fn crossing_formula_agrees_with_cramers_rule() {
     let mut rng = obscura::rng::SplitMix64(23);
+    let mut checked = 0;
     for _ in 0..1000 {
         let mut r = || DVec2::new(rng.range(-50.0, 50.0), rng.range(-50.0, 50.0));
         let (a, b, c, d) = (r(), r(), r(), r());
@@ -242,13 +243,18 @@ fn crossing_formula_agrees_with_cramers_rule() {
         if (d.x - c.x).abs() < 1e-3 {
             continue;
         }
-        if let Some(lam) = crossing_fraction(l.y, h.y - l.y, at2(x0), at2(x1) - at2(x0)) {
-            if expect.x > x0 + 1e-6 && expect.x < x1 - 1e-6 {
-                let x = x0 + (x1 - x0) * lam;
-                assert!((x - expect.x).abs() < 1e-6 * (1.0 + expect.x.abs()));
-            }
+        if expect.x > x0 + 1e-6 && expect.x < x1 - 1e-6 {
+            let lam = crossing_fraction(l.y, h.y - l.y, at2(x0), at2(x1) - at2(x0))
+                .expect("lines that cross are not parallel");
+            let x = x0 + (x1 - x0) * lam;
+            assert!((x - expect.x).abs() < 1e-6 * (1.0 + expect.x.abs()));
+            checked += 1;
         }
     }
+    assert!(
+        checked > 100,
+        "only {checked} crossings inside their interval"
+    );
 }
 
 // ---------------------------------------------------------------------------------

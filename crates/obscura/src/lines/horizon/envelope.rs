@@ -222,12 +222,10 @@ pub fn above_from(
 fn first_span(env: &[Span], x: f64, hint: usize) -> usize {
     let ok_before = |k: usize| k == 0 || env[k - 1].x1 <= x;
     if hint <= env.len() && ok_before(hint) {
-        let mut k = hint;
-        for _ in 0..8 {
+        for k in hint..(hint + 8).min(env.len() + 1) {
             if k == env.len() || env[k].x1 > x {
                 return k;
             }
-            k += 1;
         }
     }
     env.partition_point(|e| e.x1 <= x)

@@ -130,7 +130,7 @@ fn read_npy(path: &Path, budget: &MemoryBudget) -> Result<HeightField> {
         other => other.budget_at(path.display().to_string()),
     })?;
     let data = &bytes[end..];
-    let need = n.checked_mul(size).unwrap_or(usize::MAX);
+    let need = n.saturating_mul(size);
     if data.len() < need {
         return Err(fail(
             "data",
