@@ -217,7 +217,7 @@ fn crossing_formula_on_worked_numbers() {
 
 #[test]
 fn crossing_formula_agrees_with_cramers_rule() {
-    let mut rng = obscura::rng::SplitMix64(23);
+    let mut rng = obscura::bench_support::SplitMix64(23);
     let mut checked = 0;
     for _ in 0..1000 {
         let mut r = || DVec2::new(rng.range(-50.0, 50.0), rng.range(-50.0, 50.0));
@@ -294,7 +294,7 @@ fn a_single_bump_hides_what_its_silhouette_covers() {
 #[test]
 fn every_visible_piece_lies_beyond_the_earlier_horizons() {
     let vp = Viewport::new(320, 240).unwrap();
-    let mut rng = obscura::rng::SplitMix64(4);
+    let mut rng = obscura::bench_support::SplitMix64(4);
     for (name, curves, ridgeline) in [
         ("ripple", Curves::ConstantZ, false),
         ("peaks", Curves::Both, false),
