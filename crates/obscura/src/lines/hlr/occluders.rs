@@ -478,10 +478,11 @@ mod tests {
             assert!(plane.value(DVec3::new(0.2, 0.2, -2.0), &mut c) > 0.0);
             assert!(plane.value(DVec3::new(0.2, 0.2, -0.5), &mut c) < 0.0);
             assert_eq!(plane.value(DVec3::new(5.0, 3.0, -1.0), &mut c), 0.0);
-            let centre = DVec3::new(0.3, 0.3, -1.0) * 3.0 + DVec3::new(0.0, 0.0, 2.0);
+            // Behind the triangle's interior: along the ray from the eye, or straight
+            // behind it along the view direction.
             let centre = match eye {
                 Eye::Point(_) => DVec3::new(0.3, 0.3, -1.0) * 3.0,
-                Eye::Direction(_) => centre,
+                Eye::Direction(_) => DVec3::new(0.3, 0.3, -4.0),
             };
             for k in 0..3 {
                 let s = eye.side(pts[k].0, pts[(k + 1) % 3].0, inside);
