@@ -60,6 +60,11 @@ impl Plane3 {
         if v.abs() > FILTER * self.nabs.dot(d.abs()) {
             return self.sign * v;
         }
+        // A point that defines the plane (a vertex shared by the edge and the occluder)
+        // is on it: the exact predicate would reach the same 0 by its slowest path.
+        if x == self.p[0] || x == self.p[1] || x == self.p[2] {
+            return 0.0;
+        }
         counters.exact += 1;
         self.sign * plane_exact(&self.p, x)
     }
