@@ -157,6 +157,8 @@ struct Counts {
 #[derive(Default)]
 struct Scratch {
     candidates: Vec<u32>,
+    /// Per occluder, the last edge that met it.
+    stamps: Vec<u32>,
     covers: Vec<Cover>,
     sweep: Sweep,
     raw: Vec<RawPiece>,
@@ -298,8 +300,10 @@ impl Context<'_> {
         s.candidates.clear();
         self.occluders
             .gather(edge.screen[0], edge.screen[1], &mut s.candidates);
-        s.candidates.sort_unstable();
-        s.candidates.dedup();
+        // Each occluder once: stamped with the edge's number (no sort).
+        if s.stamps.len() != self.occluders.list.len() {
+            s.stamps = vec![u32::MAX; self.occluders.list.len()];
+        }
         let [p, q] = edge.screen;
         let bbox = [
             p[0].min(q[0]),
@@ -310,6 +314,11 @@ impl Context<'_> {
         let mut predicates = PredicateCounters::default();
         s.covers.clear();
         for &c in &s.candidates {
+            let stamp = &mut s.stamps[c as usize];
+            if *stamp == index {
+                continue;
+            }
+            *stamp = index;
             let o = &self.occluders.list[c as usize];
             if o.bbox[0] > bbox[2]
                 || o.bbox[2] < bbox[0]

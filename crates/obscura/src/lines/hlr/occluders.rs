@@ -154,7 +154,7 @@ impl Eye {
 impl Occluders {
     /// The occluders of a view: the polygons of the kept objects less the view's back
     /// faces, clipped by the near plane, those wholly outside another plane of the view
-    /// volume left out; and a grid of cells about twice the median polygon's size.
+    /// volume left out; and a grid of cells about 1.5 times the median polygon's size.
     pub fn new(view: &View<'_>) -> Occluders {
         let t = view.transform();
         let camera = view.camera();
@@ -400,7 +400,7 @@ fn plane_of(poly: &[(DVec3, DVec4)], eye: Eye) -> Option<(Plane3, f64)> {
     Some((Plane3::new(p, -eye_side.signum()), inside.signum()))
 }
 
-/// A cell size in pixels: twice the median of the occluders' larger screen extents
+/// A cell size in pixels: 1.5 times the median of the occluders' larger screen extents
 /// (over a sample), between 2 and 256 pixels, and no more than about 4 million cells.
 fn cell_size(list: &[Occluder], width: f64, height: f64) -> f64 {
     let step = (list.len() / 4096).max(1);
@@ -417,7 +417,7 @@ fn cell_size(list: &[Occluder], width: f64, height: f64) -> f64 {
         *sizes.select_nth_unstable_by(mid, f64::total_cmp).1
     };
     let min_for_cells = (width * height / 4.0e6).sqrt();
-    (2.0 * median).clamp(2.0, 256.0).max(min_for_cells)
+    (1.5 * median).clamp(2.0, 256.0).max(min_for_cells)
 }
 
 #[cfg(test)]
