@@ -127,10 +127,8 @@ impl<'a> Oracle<'a> {
             if self.ignored[*p as usize] || own.contains(&Some(*p)) {
                 continue;
             }
-            if let Some(t) = ray.intersect_any(tri, t_min, 1.0 - 1e-7, &tie) {
-                if t < 1.0 - 1e-7 {
-                    faces.insert(*f);
-                }
+            if ray.intersect_any(tri, t_min, 1.0 - 1e-7, &tie).is_some() {
+                faces.insert(*f);
             }
         }
         faces.len() as u32

@@ -98,11 +98,11 @@ impl Sweep {
 /// and giving a piece too short to matter to the one before. (Only the first piece can
 /// be too short and stand; [`Sweep::pieces`] gives it to the second.)
 fn push_piece(out: &mut Vec<RawPiece>, start: usize, t: [f64; 2], invisibility: u32) {
-    if let Some(last) = out[start..].last_mut() {
-        if last.invisibility == invisibility || t[1] - t[0] < MIN_PIECE {
-            last.t[1] = t[1];
-            return;
-        }
+    if let Some(last) = out[start..].last_mut()
+        && (last.invisibility == invisibility || t[1] - t[0] < MIN_PIECE)
+    {
+        last.t[1] = t[1];
+        return;
     }
     out.push(RawPiece { t, invisibility });
 }

@@ -23,11 +23,11 @@
 //! - the edge is first clipped to the view volume (Liang-Barsky in clip space, whose
 //!   coordinates are affine along the edge, so the clipped range is in the edge's own
 //!   `t`); what lies outside is not drawn;
-//! - occluders are the polygons the view keeps, as the pipeline prepares them
-//!   ([`View::into_prepared`]: objects outside the frustum and back faces of closed
-//!   objects left out, polygons clipped to the view volume, so a polygon's part in
-//!   front of the near plane hides nothing, as in every renderer); the polygons the edge
-//!   lies on never hide it;
+//! - occluders are the polygons the view keeps (objects outside the frustum and the
+//!   view's back faces of closed objects left out, as [`View::back_facing`] says),
+//!   clipped by the near plane, so a polygon's part in front of it hides nothing, as in
+//!   every renderer; polygons wholly outside another plane of the view volume are left
+//!   out; the polygons the edge lies on never hide it;
 //! - candidates come from a screen grid of the occluders' boxes built once per view,
 //!   walked along the edge's image and filtered by box and depth ([`occluders`]);
 //! - each covered interval is closed on the occluder's boundary (an edge lying exactly
@@ -40,14 +40,23 @@
 //!
 //! Every sign that decides topology (which side of a side plane, in front or behind) is
 //! a floating-point value with a forward error bound, decided by Shewchuk's exact
-//! adaptive predicates (`robust::orient3d`, `orient2d`) when within the bound; cut
-//! points are `f64` ratios of those values. The eye-space positions are the pipeline's,
-//! bit for bit (mesh edges are transformed by the same [`crate::view::ModelView`]), so a
-//! vertex shared by an edge and an occluder is the same point in both.
+//! adaptive predicate (`robust::orient3d`) when within the bound, on the world
+//! coordinates of the mesh as given (the same `f64` points as the edges' and the ray
+//! casters'), so what is exactly collinear or coplanar in the input (an edge lying on
+//! another object's edge or face, touching boxes) is decided exactly; a point that
+//! defines a plane is on it. Cut points are `f64` ratios of those values.
+//!
+//! # Performance
+//! Measured with `cargo bench -p obscura --bench lines` (1920x1080, one thread, every
+//! welded edge drawn, as the placeholder edge finder gives them): a 3,720-triangle
+//! sphere (5,580 edges) 5.9 ms, a 3,720-triangle torus 5.0 ms, a 99,904-triangle sphere
+//! (149,856 edges) 232 ms, the 998,000-triangle `demo:sphere` (1.5 million edges) about
+//! 2.5 s. Feature edges (silhouettes, creases) are a small part of these.
 //!
 //! # Complexity
-//! O(P) to build the occluder grid for P kept polygons; then per edge, the occluders in
-//! the grid cells its image crosses. Output-sensitive for edges of meshes whose
+//! O(P) to build the occluder grid for P kept polygons (cells 1.5 times the median
+//! polygon's screen size); then per edge, the occluders in the grid cells its image
+//! crosses, each met once (a per-worker stamp), filtered by screen box and depth. Output-sensitive for edges of meshes whose
 //! polygons are small on screen; an edge behind a large polygon meets it once.
 //! Edges run in parallel on rayon's pool (feature `parallel`), reporting progress as
 //! they finish and checking the time limit and stop flag between chunks.
