@@ -141,6 +141,11 @@ pub(super) fn cover(
 ) -> Option<Cover> {
     let [a, b] = edge.world;
     let (mut lo, mut hi) = (edge.t[0], edge.t[1]);
+    // The plane first: it rejects the occluders behind the edge with two values.
+    let (ga, gb) = (o.plane.value(a, counters), o.plane.value(b, counters));
+    if !keep(ga, gb, false, &mut lo, &mut hi) {
+        return None;
+    }
     let mut boundary = false;
     for s in occluders.sides_of(o) {
         let (fa, fb) = (s.value(a, counters), s.value(b, counters));
@@ -151,10 +156,6 @@ pub(super) fn cover(
         if !keep(fa, fb, true, &mut lo, &mut hi) {
             return None;
         }
-    }
-    let (ga, gb) = (o.plane.value(a, counters), o.plane.value(b, counters));
-    if !keep(ga, gb, false, &mut lo, &mut hi) {
-        return None;
     }
     Some(Cover {
         t: [lo, hi],
