@@ -330,14 +330,17 @@ impl Context<'_> {
                 continue;
             }
             *stamp = index;
-            let o = &self.occluders.list[c as usize];
-            if o.bbox[0] > bbox[2]
-                || o.bbox[2] < bbox[0]
-                || o.bbox[1] > bbox[3]
-                || o.bbox[3] < bbox[1]
-                || o.near_depth >= edge.far_depth
-                || own.contains(&Some(o.polygon))
+            let ob = &self.occluders.bounds[c as usize];
+            if ob[0] > bbox[2]
+                || ob[2] < bbox[0]
+                || ob[1] > bbox[3]
+                || ob[3] < bbox[1]
+                || ob[4] >= edge.far_depth
             {
+                continue;
+            }
+            let o = &self.occluders.list[c as usize];
+            if own.contains(&Some(o.polygon)) {
                 continue;
             }
             counts.pair_tests += 1;

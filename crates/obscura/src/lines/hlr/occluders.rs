@@ -98,6 +98,9 @@ pub(super) struct PredicateCounters {
 #[derive(Debug)]
 pub(super) struct Occluders {
     pub list: Vec<Occluder>,
+    /// Per occluder, its screen box and nearest depth (`[min x, min y, max x, max y,
+    /// depth]`), apart from the rest so that the filters read only these.
+    pub bounds: Vec<[f64; 5]>,
     pub sides: Vec<Plane3>,
     /// Grid: cell size in pixels, columns, rows, CSR starts and occluder numbers.
     pub cell: f64,
@@ -284,8 +287,13 @@ impl Occluders {
                 }
             }
         }
+        let bounds = list
+            .iter()
+            .map(|o| [o.bbox[0], o.bbox[1], o.bbox[2], o.bbox[3], o.near_depth])
+            .collect();
         Occluders {
             list,
+            bounds,
             sides,
             cell,
             columns,
