@@ -50,11 +50,10 @@
 //! Measured with `cargo bench -p obscura --bench lines` (1920x1080, one thread, every
 //! welded edge drawn, as the placeholder edge finder gives them; 2-core machine shared
 //! with other builds, 2026-11-29): a 3,720-triangle sphere (5,580 edges) 4.4 ms, a
-//! 3,720-triangle torus 3.7 ms, a 99,904-triangle sphere (149,856 edges) 124-151 ms, the
-//! 998,000-triangle `demo:sphere` (1.5 million edges) 1.62 s, Sponza (262k triangles,
-//! 405,820 edges, 920,206 pieces) 1.6-2.2 s (runs differ with the
-//! machine's load). Feature edges (silhouettes, creases) are a
-//! fraction of these edges.
+//! 3,720-triangle torus 3.7 ms, a 99,904-triangle sphere (149,856 edges) 124-151 ms,
+//! the 998,000-triangle `demo:sphere` (1.5 million edges) 1.62 s, Sponza (262k
+//! triangles, 405,820 edges, 920,206 pieces) 1.6-2.2 s (runs differ with the machine's
+//! load). Feature edges (silhouettes, creases) are a fraction of these edges.
 //!
 //! # Complexity
 //! O(P) to build the occluder grid for P kept polygons (cells 1.5 times the median
