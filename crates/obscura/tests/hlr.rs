@@ -15,10 +15,10 @@ use std::time::Duration;
 
 use glam::{DMat4, DVec3};
 use obscura::accel::triangles::{PrimaryRays, WatertightRay};
+use obscura::bench_support::SplitMix64;
 use obscura::index::SceneIndex;
 use obscura::lines::hlr::{self, HlrOptions};
 use obscura::lines::{Drawing, EdgeKinds};
-use obscura::bench_support::SplitMix64;
 use obscura::scene::{Faces, ObjectDesc, Scene, demo};
 use obscura::view::{PrepareOptions, View};
 use obscura::{Camera, Error, Viewport};
@@ -575,4 +575,71 @@ fn time_limit_stop_flag_and_progress() {
     let (d, stats) = hlr::draw(&index, &view, &o).unwrap();
     assert_eq!(last.load(Ordering::Relaxed), stats.edges);
     assert_eq!(d.edges.len() as u64, stats.edges);
+}
+
+/// The default drawing (feature edges only: silhouettes, creases, boundaries, borders,
+/// intersection lines) of interpenetrating boxes, a torus and the demo scene, checked
+/// by the library's own sampling oracle (`lines::check`, the one `--check` runs), which
+/// shares no code with the cutting.
+#[test]
+fn feature_edge_drawings_pass_the_library_check() {
+    use obscura::lines::EdgeKind;
+    use obscura::lines::check::{CheckOptions, check};
+    let boxes = scene_of(vec![
+        (
+            demo::box_mesh(DVec3::splat(-0.5), DVec3::splat(0.5)),
+            DMat4::IDENTITY,
+            true,
+        ),
+        (
+            demo::box_mesh(DVec3::new(-0.2, -0.8, -0.3), DVec3::new(0.9, 0.3, 0.4)),
+            DMat4::from_rotation_y(0.5),
+            true,
+        ),
+    ]);
+    let torus = scene_of(vec![(
+        demo::torus_mesh(1.0, 0.35, 40, 20),
+        DMat4::IDENTITY,
+        true,
+    )]);
+    let default = demo::default_scene();
+    let mut rng = SplitMix64(11);
+    for (name, scene) in [("boxes", &boxes), ("torus", &torus), ("default", &default)] {
+        let index = SceneIndex::new(scene);
+        let radius = scene.bounds().extent().length();
+        for k in 0..4 {
+            let dir = DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(0.1, 1.0),
+                rng.range(-1.0, 1.0),
+            )
+            .normalize_or(DVec3::Z);
+            let centre = scene.bounds().center();
+            let eye = centre + dir * radius * rng.range(1.2, 2.0);
+            let camera = if k % 2 == 1 {
+                Camera::orthographic(eye, centre, DVec3::Y, radius, 0.01, 100.0 * radius)
+            } else {
+                Camera::perspective(eye, centre, DVec3::Y, 50.0, 0.01, 100.0 * radius)
+            };
+            let view = View::new(
+                scene,
+                &camera,
+                Viewport::new(400, 300).unwrap(),
+                &PrepareOptions::default(),
+            )
+            .unwrap();
+            let (d, _) = hlr::draw(&index, &view, &HlrOptions::default()).unwrap();
+            assert!(d.visible().count() > 0, "{name}: nothing visible");
+            if name == "boxes" {
+                assert!(
+                    d.edges.iter().any(|e| e.kind == EdgeKind::Intersection),
+                    "boxes: no intersection line"
+                );
+            }
+            assert!(d.edges.iter().all(|e| e.kind != EdgeKind::Other), "{name}");
+            let report = check(&index, &view, &d, &CheckOptions::default());
+            assert!(report.samples > 0, "{name}: nothing sampled");
+            assert!(report.agrees(), "{name} view {k}: {report:?}");
+        }
+    }
 }
