@@ -64,6 +64,7 @@ use crate::accel::grid::{GridOptions, UniformGrid};
 use crate::accel::octree::Octree;
 use crate::accel::triangles::SceneTriangles;
 use crate::budget::MemoryBudget;
+use crate::lines::edges::IntersectionSegment;
 use crate::scene::{EdgeAdjacency, Scene};
 use crate::surface::{self, Algorithm, RenderOptions, Stats};
 use crate::view::{PreparedView, View};
@@ -179,6 +180,7 @@ pub struct SceneIndex<'s> {
     triangles: OnceLock<(SceneTriangles, f64)>,
     bvh: OnceLock<Bvh>,
     adjacency: OnceLock<Vec<EdgeAdjacency>>,
+    intersections: OnceLock<Vec<IntersectionSegment>>,
     grids: Keyed<(GridOptions, u64), UniformGrid>,
     bsp: Keyed<BspOptions, BspTree>,
     octrees: Keyed<(u32, u64), Octree>,
@@ -204,6 +206,7 @@ impl<'s> SceneIndex<'s> {
             triangles: OnceLock::new(),
             bvh: OnceLock::new(),
             adjacency: OnceLock::new(),
+            intersections: OnceLock::new(),
             grids: Keyed::default(),
             bsp: Keyed::default(),
             octrees: Keyed::default(),
@@ -269,6 +272,14 @@ impl<'s> SceneIndex<'s> {
             self.counters.adjacency.fetch_add(1, Ordering::Relaxed);
             a
         })
+    }
+
+    /// Where polygons of the scene pass through each other, one segment per crossing
+    /// pair (see [`crate::lines::edges::intersect`]; view independent, built once,
+    /// with [`Self::bvh`]).
+    pub fn intersection_lines(&self) -> &[IntersectionSegment] {
+        self.intersections
+            .get_or_init(|| crate::lines::edges::intersect::intersection_lines(self.bvh()))
     }
 
     /// The uniform grid over [`Self::triangles`] for these options, built under

@@ -18,6 +18,7 @@
 //! millimetres on a page), [`preview`] rasterises them to a PNG, and [`json`] keeps
 //! every edge with its visible and hidden intervals for other tools.
 
+pub mod check;
 mod drawing;
 pub mod edges;
 pub mod hlr;
