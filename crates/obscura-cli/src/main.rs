@@ -5,6 +5,7 @@ mod bench;
 mod common;
 mod compare;
 mod grid;
+mod lines;
 mod out;
 mod outputs;
 mod render;
@@ -41,6 +42,10 @@ enum Command {
     /// Time each algorithm over a sweep of face counts and fit the growth exponent.
     #[command(after_help = bench::EXAMPLES)]
     Bench(bench::BenchArgs),
+    /// Draw the visible (and hidden) lines of a scene or a height field as SVG for
+    /// people and pen plotters, with a PNG preview and the JSON of every edge.
+    #[command(after_help = lines::EXAMPLES)]
+    Lines(lines::LinesArgs),
 }
 
 fn main() -> ExitCode {
@@ -51,6 +56,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Lines(args) => lines::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
