@@ -28,6 +28,7 @@ Examples:
   obscura lines scene.toml --algo roberts --json edges.json --check
   obscura lines --algo horizon --function ripple --grid 200 -o ripple.svg
   obscura lines --algo horizon --field terrain.png --units mm --page 300x200mm -o terrain.svg
+  obscura lines --drawing edges.json --units mm --page A3 --hidden dashed -o a3.svg
 
 Layers: visible lines on the Inkscape layer \"1-visible\" (id layer1), hidden ones on
 \"2-hidden\" (id layer2): AxiDraw's layer numbers and vpype's `read` take the leading
@@ -139,6 +140,10 @@ pub struct LinesArgs {
     /// Print counts and times.
     #[arg(long)]
     pub stats: bool,
+    /// Plot a drawing saved by --json instead of drawing a scene (other page, units,
+    /// hidden-line style, without computing the drawing again).
+    #[arg(long, value_name = "EDGES.json", conflicts_with_all = ["field", "function", "check", "scene"])]
+    pub drawing: Option<PathBuf>,
     /// Height field for --algo horizon: a 2D NumPy array (.npy), a CSV grid of
     /// numbers, or a grayscale PNG (8 or 16 bits).
     #[arg(long, value_name = "FILE", conflicts_with = "function")]
@@ -258,6 +263,8 @@ fn progress_bar(name: &str) -> (indicatif::ProgressBar, Progress) {
 /// What the drawing stage gives back.
 struct Drawn {
     drawing: Drawing,
+    /// The algorithm that drew it (for a saved drawing, the one its file names).
+    algorithm: String,
     /// The algorithm's own counters, as JSON.
     stats: serde_json::Value,
     check: Option<CheckSummary>,
@@ -355,6 +362,12 @@ pub fn run(args: &LinesArgs) -> Result<()> {
             "height fields are drawn by --algo horizon",
         ));
     }
+    if horizon && args.drawing.is_some() {
+        return Err(Error::option(
+            "--drawing",
+            "a saved drawing is plotted as it is: leave out --algo horizon",
+        ));
+    }
     if horizon && args.view.scene.is_some() {
         return Err(Error::option(
             "--algo",
@@ -368,9 +381,9 @@ pub fn run(args: &LinesArgs) -> Result<()> {
         ));
     }
     let layout = layout(args)?;
-    let input = match &args.field {
-        Some(f) => Some(f.to_string_lossy().into_owned()),
-        None => args.view.scene.clone(),
+    let input = match (&args.field, &args.drawing) {
+        (Some(f), _) | (None, Some(f)) => Some(f.to_string_lossy().into_owned()),
+        (None, None) => args.view.scene.clone(),
     };
     let mut outputs = Outputs::stage_with_extensions(
         input.as_deref(),
@@ -401,7 +414,22 @@ pub fn run(args: &LinesArgs) -> Result<()> {
         .is_terminal()
         .then(|| progress_bar(args.algo.name()));
     let progress = bar.as_ref().map(|(_, p)| p.clone());
-    let (spec, load_ms, drawn) = if horizon {
+    let (spec, load_ms, drawn) = if let Some(path) = &args.drawing {
+        let start = Instant::now();
+        let file = LinesFile::read(path)?;
+        let drawing = file.to_drawing().map_err(|e| {
+            Error::option("--drawing", format!("{}: {}", path.display(), reason(&e)))
+        })?;
+        let load_ms = start.elapsed().as_secs_f64() * 1e3;
+        let drawn = Drawn {
+            drawing,
+            algorithm: file.algorithm.unwrap_or_else(|| "saved".to_string()),
+            stats: serde_json::Value::Null,
+            check: None,
+            draw_ms: 0.0,
+        };
+        (path.display().to_string(), load_ms, drawn)
+    } else if horizon {
         let start = Instant::now();
         let field = height_field(args)?;
         let load_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -413,6 +441,7 @@ pub fn run(args: &LinesArgs) -> Result<()> {
             horizon::draw(&field, &camera, viewport, &HorizonOptions::default())?;
         let drawn = Drawn {
             drawing,
+            algorithm: args.algo.name().to_string(),
             stats: serde_json::to_value(&stats).unwrap_or_default(),
             check: None,
             draw_ms: start.elapsed().as_secs_f64() * 1e3,
@@ -456,6 +485,7 @@ pub fn run(args: &LinesArgs) -> Result<()> {
             let check = args.check.then(|| check_drawing(&index, &view, &drawing));
             Ok::<_, Error>(Drawn {
                 drawing,
+                algorithm: args.algo.name().to_string(),
                 stats,
                 check,
                 draw_ms,
@@ -493,7 +523,7 @@ pub fn run(args: &LinesArgs) -> Result<()> {
     if args.json.is_some() {
         let mut file = LinesFile::from_drawing(&drawn.drawing)?;
         file.scene = Some(spec.clone());
-        file.algorithm = Some(args.algo.name().to_string());
+        file.algorithm = Some(drawn.algorithm.clone());
         outputs.write("--json", |p| file.write(p))?;
     }
     outputs.commit()?;
@@ -529,7 +559,7 @@ pub fn run(args: &LinesArgs) -> Result<()> {
         },
         units(before),
         units(after),
-        args.algo.name(),
+        drawn.algorithm,
         drawn.draw_ms + plot_ms
     );
     if let Some(c) = &drawn.check {
