@@ -155,7 +155,11 @@ impl Polyline {
     /// Its length in pixels.
     #[must_use]
     pub fn length(&self) -> f64 {
-        self.points.windows(2).map(|w| w[0].distance(w[1])).sum()
+        self.points
+            .windows(2)
+            .map(|w| w[0].distance(w[1]))
+            .sum::<f64>()
+            + 0.0
     }
 }
 
@@ -316,7 +320,7 @@ pub fn plot(drawing: &Drawing, options: &PlotOptions) -> crate::Result<(Plot, Pl
         layer.travel_after = travel(&lines);
         layer.polylines = lines.len() as u64;
         layer.points = lines.iter().map(|l| l.points.len() as u64).sum();
-        layer.length = lines.iter().map(Polyline::length).sum();
+        layer.length = lines.iter().map(Polyline::length).sum::<f64>() + 0.0;
         if hidden {
             plot.hidden = lines;
         } else {
@@ -399,14 +403,30 @@ fn band_cells(s: &Segment, tol: f64, origin: DVec2, cell: f64, out: &mut Vec<(i6
     }
 }
 
+/// A segment's unit direction and length, computed once for the pair tests.
+#[derive(Clone, Copy)]
+struct Frame {
+    u: DVec2,
+    len: f64,
+}
+
+impl Frame {
+    fn of(s: &Segment) -> Frame {
+        let d = s.b - s.a;
+        let len = d.length();
+        Frame {
+            u: if len > 0.0 { d / len } else { DVec2::ZERO },
+            len,
+        }
+    }
+}
+
 /// Whether `short` lies on `long`'s line within `tol` and overlaps it by more than `tol`.
-fn overlapping(long: &Segment, short: &Segment, tol: f64) -> bool {
-    let d = long.b - long.a;
-    let len = d.length();
+fn overlapping(long: &Segment, frame: Frame, short: &Segment, tol: f64) -> bool {
+    let Frame { u, len } = frame;
     if len == 0.0 {
         return false;
     }
-    let u = d / len;
     let n = u.perp();
     let (pa, pb) = (short.a - long.a, short.b - long.a);
     if n.dot(pa).abs() > tol || n.dot(pb).abs() > tol {
@@ -442,6 +462,7 @@ fn dedupe(segments: Vec<Segment>, options: &PlotOptions, stats: &mut PlotStats) 
         keys.extend(cells.iter().map(|&c| (c, k as u32)));
     }
     keys.sort_unstable();
+    let frames: Vec<Frame> = segments.iter().map(Frame::of).collect();
     let mut sets = Sets::new(n);
     let mut merged_any = vec![false; n];
     let mut i = 0;
@@ -462,13 +483,19 @@ fn dedupe(segments: Vec<Segment>, options: &PlotOptions, stats: &mut PlotStats) 
                     } else if !options.dedupe {
                         continue;
                     }
-                    let (long, short) =
-                        if sa.a.distance_squared(sa.b) >= sb.a.distance_squared(sb.b) {
-                            (sa, sb)
-                        } else {
-                            (sb, sa)
-                        };
-                    if overlapping(long, short, tol) {
+                    let (fa, fb) = (frames[a as usize], frames[b as usize]);
+                    let (long, frame, short) = if fa.len >= fb.len {
+                        (sa, fa, sb)
+                    } else {
+                        (sb, fb, sa)
+                    };
+                    // Directions further apart than the shorter piece can tilt within
+                    // the tolerance: not on one line.
+                    let short_len = fa.len.min(fb.len);
+                    if fa.u.perp_dot(fb.u).abs() * short_len > 2.0 * tol {
+                        continue;
+                    }
+                    if overlapping(long, frame, short, tol) {
                         sets.union(a, b);
                         merged_any[a as usize] = true;
                         merged_any[b as usize] = true;
@@ -585,26 +612,54 @@ fn join(segments: &[Segment], options: &PlotOptions, stats: &mut LayerStats) -> 
     }
     let points: Vec<DVec2> = segments.iter().flat_map(|s| [s.a, s.b]).collect();
     let mut sets = Sets::new(points.len());
-    // Ends within `tol` of each other: cells of `tol`, each point against its own and
-    // the next cells (each pair looked at once).
-    let cell_of = |p: DVec2| ((p.x / tol).floor() as i64, (p.y / tol).floor() as i64);
-    let mut grid: HashMap<(i64, i64), Vec<u32>> = HashMap::with_capacity(points.len());
-    for (k, &p) in points.iter().enumerate() {
-        grid.entry(cell_of(p)).or_default().push(k as u32);
-    }
-    for (k, &p) in points.iter().enumerate() {
-        let (cx, cy) = cell_of(p);
-        for dy in -1..=1 {
-            for dx in -1..=1 {
-                if let Some(list) = grid.get(&(cx + dx, cy + dy)) {
-                    for &q in list {
-                        if (q as usize) > k && points[q as usize].distance(p) <= tol {
-                            sets.union(k as u32, q);
-                        }
-                    }
+    // Ends within `tol` of each other: cells of `tol` (points sorted by cell), each
+    // point against the later points of its own cell and those of the four cells after
+    // it (each pair looked at once).
+    let mut keyed: Vec<(i64, i64, u32)> = points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            (
+                (p.y / tol).floor() as i64,
+                (p.x / tol).floor() as i64,
+                k as u32,
+            )
+        })
+        .collect();
+    keyed.sort_unstable();
+    // `below` follows the first point at or after cell (cy + 1, cx - 1): it only moves
+    // forward as the cells do, so the whole sweep is linear after the sort.
+    let mut below = 0;
+    let mut i = 0;
+    while i < keyed.len() {
+        let (cy, cx) = (keyed[i].0, keyed[i].1);
+        let mut j = i;
+        while j < keyed.len() && (keyed[j].0, keyed[j].1) == (cy, cx) {
+            j += 1;
+        }
+        let mut next = j;
+        while next < keyed.len() && (keyed[next].0, keyed[next].1) == (cy, cx + 1) {
+            next += 1;
+        }
+        while below < keyed.len() && (keyed[below].0, keyed[below].1) < (cy + 1, cx - 1) {
+            below += 1;
+        }
+        let mut below_end = below;
+        while below_end < keyed.len()
+            && (keyed[below_end].0, keyed[below_end].1) <= (cy + 1, cx + 1)
+        {
+            below_end += 1;
+        }
+        for x in i..j {
+            let k = keyed[x].2;
+            let p = points[k as usize];
+            for e in keyed[x + 1..next].iter().chain(&keyed[below..below_end]) {
+                if points[e.2 as usize].distance(p) <= tol {
+                    sets.union(k, e.2);
                 }
             }
         }
+        i = j;
     }
     let mut long = Vec::with_capacity(n);
     for (k, s) in segments.iter().enumerate() {
@@ -616,17 +671,18 @@ fn join(segments: &[Segment], options: &PlotOptions, stats: &mut LayerStats) -> 
         }
     }
     // Nodes: one per set, at its representative's position.
-    let mut node_of_root: HashMap<u32, u32> = HashMap::new();
+    let mut node_of_root = vec![u32::MAX; points.len()];
     let mut node_pos: Vec<DVec2> = Vec::new();
     let mut edges: Vec<[u32; 2]> = Vec::with_capacity(long.len());
     for &k in &long {
         let mut ends = [0u32; 2];
         for (e, end) in ends.iter_mut().enumerate() {
             let root = sets.find((2 * k + e) as u32);
-            *end = *node_of_root.entry(root).or_insert_with(|| {
+            if node_of_root[root as usize] == u32::MAX {
+                node_of_root[root as usize] = node_pos.len() as u32;
                 node_pos.push(points[root as usize]);
-                (node_pos.len() - 1) as u32
-            });
+            }
+            *end = node_of_root[root as usize];
         }
         if ends[0] == ends[1] {
             // Both ends merged through short pieces: too short after all.
@@ -705,32 +761,61 @@ fn join(segments: &[Segment], options: &PlotOptions, stats: &mut LayerStats) -> 
 
 /// Leaves out points where the line goes on straight: a point is left out when it and
 /// every point left out since the last kept one are within `tol` of the chord from the
-/// last kept point to the next point (at most 64 in a row).
+/// last kept point to the next kept one.
+///
+/// Each point `p` left out bounds the chord's direction from the last kept point `a` to
+/// within `asin(tol / |p - a|)` of `p - a`'s; the bounds are intersected as points are
+/// left out, so each point costs O(1).
 fn straighten(points: &[DVec2], tol: f64) -> Vec<DVec2> {
     if points.len() <= 2 {
         return points.to_vec();
     }
     let mut out = vec![points[0]];
-    let mut skipped: Vec<DVec2> = Vec::new();
-    for i in 1..points.len() - 1 {
-        let (a, c) = (out[out.len() - 1], points[i + 1]);
-        let within = |p: DVec2| {
-            let d = c - a;
-            let len2 = d.length_squared();
-            if len2 == 0.0 {
-                return false;
-            }
-            let t = (p - a).dot(d) / len2;
-            (0.0..=1.0).contains(&t) && (a + d * t).distance(p) <= tol
-        };
-        if skipped.len() < 64 && within(points[i]) && skipped.iter().all(|&p| within(p)) {
-            skipped.push(points[i]);
-        } else {
-            out.push(points[i]);
-            skipped.clear();
+    let mut a = points[0];
+    // Directions are angles from `base` (the first direction after `a`).
+    let mut base: Option<DVec2> = None;
+    let (mut lo, mut hi, mut reach) = (f64::NEG_INFINITY, f64::INFINITY, 0.0f64);
+    let mut pending: Option<DVec2> = None;
+    let angle = |base: DVec2, v: DVec2| base.perp_dot(v).atan2(base.dot(v));
+    for &q in &points[1..] {
+        let mut v = q - a;
+        let mut r = v.length();
+        if r == 0.0 && pending.is_none() {
+            // The same point twice in a row.
+            continue;
         }
+        // Back at `a` (a line that returns on itself) ends the chord too.
+        let mut theta = if r == 0.0 {
+            f64::NAN
+        } else {
+            angle(*base.get_or_insert(v / r), v)
+        };
+        if let Some(p) = pending
+            && !(theta >= lo && theta <= hi && r >= reach)
+        {
+            // `q` cannot end a chord that keeps the points since `a` within `tol`.
+            out.push(p);
+            a = p;
+            v = q - a;
+            r = v.length();
+            if r == 0.0 {
+                pending = None;
+                base = None;
+                continue;
+            }
+            base = Some(v / r);
+            theta = 0.0;
+            (lo, hi, reach) = (f64::NEG_INFINITY, f64::INFINITY, 0.0);
+        }
+        let delta = (tol / r).min(1.0).asin();
+        lo = lo.max(theta - delta);
+        hi = hi.min(theta + delta);
+        reach = reach.max(r);
+        pending = Some(q);
     }
-    out.push(points[points.len() - 1]);
+    if let Some(p) = pending {
+        out.push(p);
+    }
     out
 }
 

@@ -334,4 +334,14 @@ fn straightening_keeps_curves_within_the_tolerance() {
         .map(|k| p(f64::from(k), 2.0 * f64::from(k)))
         .collect();
     assert_eq!(straighten(&line, 0.001), vec![line[0], line[10]]);
+    // A line that goes back on itself keeps its turning points; repeated points go.
+    let (a, b, c) = (p(0.0, 0.0), p(5.0, 0.0), p(9.0, 0.0));
+    assert_eq!(straighten(&[a, b, a], 0.001), vec![a, b, a]);
+    assert_eq!(straighten(&[a, c, b], 0.001), vec![a, c, b]);
+    assert_eq!(straighten(&[a, b, b, c], 0.001), vec![a, c]);
+    // Just within and just beyond the tolerance.
+    let bent = [a, p(5.0, 0.0009), c];
+    assert_eq!(straighten(&bent, 0.001).len(), 2);
+    let bent = [a, p(5.0, 0.0011), c];
+    assert_eq!(straighten(&bent, 0.001).len(), 3);
 }
