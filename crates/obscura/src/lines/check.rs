@@ -9,7 +9,7 @@
 //! [`Piece::points`]). For each sample point `P` on its 3D edge, one ray is cast through
 //! `P` from the eye (perspective) or along the view axis from the eye plane
 //! (orthographic) against the scene's BVH ([`SceneIndex::bvh`], exact watertight
-//! triangle tests), ignoring the polygons the edge lies on ([`DrawnEdge::faces`]). The
+//! triangle tests), ignoring the polygons the edge lies on ([`super::DrawnEdge::faces`]). The
 //! point is *covered* when a surface is hit nearer than `P` by more than the tolerance:
 //! at a ray parameter below `t_P (1 - tolerance)` (perspective, `t_P = 1`), or below
 //! `d_P - tolerance max(|d_P|, far - near)` (orthographic, `d_P` the sample's depth).
@@ -36,7 +36,7 @@
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 
-use super::{Drawing, DrawnEdge, Piece};
+use super::{Drawing, Piece};
 use crate::accel::bvh::traverse::{TraceCounters, TraversalStack};
 use crate::accel::triangles::{HitContext, PrimaryRays, TieRule, WatertightRay};
 use crate::scene::Projection;
@@ -269,9 +269,8 @@ impl Caster<'_> {
             return;
         };
         let [t0, t1] = piece.t;
-        if !(t0.is_finite() && t1.is_finite() && (0.0..=1.0).contains(&t0))
-            || !(0.0..=1.0).contains(&t1)
-        {
+        let unit = 0.0..=1.0;
+        if !(unit.contains(&t0) && unit.contains(&t1)) {
             r.pieces_invalid += 1;
             return;
         }
@@ -286,7 +285,7 @@ impl Caster<'_> {
             r.pieces_unsampled += 1;
             return;
         }
-        let own = edge_faces(edge);
+        let own = edge.faces;
         for f in own.iter().flatten() {
             if let Some(x) = s.ignored.get_mut(*f as usize) {
                 *x = true;
@@ -320,9 +319,8 @@ impl Caster<'_> {
             };
             let m = o.margin_pixels;
             let camera = self.view.camera();
-            if !(pixel.x >= m && pixel.x <= w - m && pixel.y >= m && pixel.y <= h - m)
-                || !(depth >= camera.near && depth <= camera.far)
-            {
+            let inside = pixel.x >= m && pixel.x <= w - m && pixel.y >= m && pixel.y <= h - m;
+            if !(inside && depth >= camera.near && depth <= camera.far) {
                 continue;
             }
             sampled = true;
@@ -398,10 +396,6 @@ impl Caster<'_> {
         let hit = bvh.closest_hit(&ctx, t_max, &mut s.stack, &mut TraceCounters::default());
         (hit.is_hit() && hit.t < t_max).then_some(hit.face)
     }
-}
-
-fn edge_faces(edge: &DrawnEdge) -> [Option<u32>; 2] {
-    edge.faces
 }
 
 #[cfg(test)]

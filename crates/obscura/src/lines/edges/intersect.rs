@@ -26,7 +26,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
-use crate::accel::bvh::{Bvh, Slot, WIDTH};
+use crate::accel::bvh::{Bvh, Slot, WIDTH, f32_down, f32_up};
 use crate::geom::Aabb;
 
 /// A segment where two polygons of the scene cross (view independent).
@@ -93,16 +93,32 @@ pub fn triangle_intersection(t1: &[DVec3; 3], t2: &[DVec3; 3]) -> Option<[DVec3;
     if shared >= 2 {
         return None;
     }
+    // Nothing but a point (or nothing) when no vertex is strictly on each side and at
+    // most one lies on the plane; coplanar triangles (all on the plane) give nothing.
     let side = |o: [f64; 3]| {
-        (o[0] > 0.0 && o[1] > 0.0 && o[2] > 0.0)
-            || (o[0] < 0.0 && o[1] < 0.0 && o[2] < 0.0)
-            || o == [0.0; 3]
+        let zeros = o.iter().filter(|&&x| x == 0.0).count();
+        let crosses = o.iter().any(|&x| x > 0.0) && o.iter().any(|&x| x < 0.0);
+        zeros == 3 || (!crosses && zeros <= 1)
     };
-    let o2 = t2.map(|p| orient3d(t1[0], t1[1], t1[2], p));
+    // A shared vertex lies exactly on the other's plane: its orientation is 0 without
+    // asking `orient3d`, whose exact (slow) path every zero would take.
+    let o2 = t2.map(|p| {
+        if t1.contains(&p) {
+            0.0
+        } else {
+            orient3d(t1[0], t1[1], t1[2], p)
+        }
+    });
     if side(o2) {
         return None;
     }
-    let o1 = t1.map(|p| orient3d(t2[0], t2[1], t2[2], p));
+    let o1 = t1.map(|p| {
+        if t2.contains(&p) {
+            0.0
+        } else {
+            orient3d(t2[0], t2[1], t2[2], p)
+        }
+    });
     if side(o1) {
         return None;
     }
@@ -164,19 +180,24 @@ fn crossings_of(bvh: &Bvh, i: usize, stack: &mut Vec<u32>, out: &mut Vec<(u32, u
     let polys = bvh.triangle_polygons();
     let t = &tris[i];
     let b = triangle_box(t);
+    // The query box in single precision, rounded outwards, against the nodes' boxes
+    // as stored (empty slots have `+inf` corners and never overlap).
+    let lo = [f32_down(b.min.x), f32_down(b.min.y), f32_down(b.min.z)];
+    let hi = [f32_up(b.max.x), f32_up(b.max.y), f32_up(b.max.z)];
     stack.clear();
     stack.push(0);
     while let Some(n) = stack.pop() {
         let node = bvh.node(n);
         for k in 0..WIDTH {
-            let slot = node.slot(k);
-            if slot == Slot::Empty || !overlaps(&node.slot_box(k), &b) {
+            let overlap = (0..3).all(|a| node.min[a][k] <= hi[a] && lo[a] <= node.max[a][k]);
+            if !overlap {
                 continue;
             }
-            match slot {
+            match node.slot(k) {
                 Slot::Node(c) => stack.push(c),
                 Slot::Leaf { first, count } => {
-                    for j in (first as usize..(first + count) as usize).filter(|&j| j > i) {
+                    let start = (first as usize).max(i + 1);
+                    for j in start..(first + count) as usize {
                         if polys[j] == polys[i] || !overlaps(&triangle_box(&tris[j]), &b) {
                             continue;
                         }
