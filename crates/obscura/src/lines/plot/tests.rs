@@ -138,8 +138,10 @@ fn hidden_pieces_under_visible_ones_are_dropped_there() {
     assert!((stats.hidden.length - 15.0).abs() < 1e-9);
     assert!((stats.visible.length - 5.0).abs() < 1e-9);
     // Kept when asked.
-    let mut o = PlotOptions::default();
-    o.drop_hidden_under_visible = false;
+    let o = PlotOptions {
+        drop_hidden_under_visible: false,
+        ..PlotOptions::default()
+    };
     let (_, stats) = plot_with(
         &[
             (p(0.0, 5.0), p(20.0, 5.0), 1),

@@ -24,10 +24,13 @@ fn sample() -> Plot {
     }
 }
 
+/// Attributes as (name, value).
+type Attributes = Vec<(String, String)>;
+
 /// The layers: (id, label, attributes) and the points of each path.
 struct Parsed {
-    root: Vec<(String, String)>,
-    layers: Vec<(String, String, Vec<(String, String)>, Vec<Vec<DVec2>>)>,
+    root: Attributes,
+    layers: Vec<(String, String, Attributes, Vec<Vec<DVec2>>)>,
 }
 
 fn parse(svg: &str) -> Parsed {
@@ -51,7 +54,7 @@ fn parse(svg: &str) -> Parsed {
             assert_eq!(path.tag_name().name(), "path");
             let d = path.attribute("d").unwrap();
             let pts = d
-                .split(|c: char| c == ' ' || c == 'M' || c == 'L')
+                .split([' ', 'M', 'L'])
                 .filter(|s| !s.is_empty())
                 .map(|xy| {
                     let (x, y) = xy.split_once(',').unwrap();
