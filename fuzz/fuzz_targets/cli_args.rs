@@ -25,6 +25,8 @@ mod common;
 mod compare;
 #[path = "../../crates/obscura-cli/src/grid.rs"]
 mod grid;
+#[path = "../../crates/obscura-cli/src/lines.rs"]
+mod lines;
 #[path = "../../crates/obscura-cli/src/out.rs"]
 mod out;
 #[path = "../../crates/obscura-cli/src/outputs.rs"]
@@ -182,6 +184,15 @@ fuzz_target!(|data: &[u8]| {
             vec![("--json", a.json.as_deref())],
             a.naming,
         ),
+        Command::Lines(a) => (
+            a.view.scene.as_deref(),
+            vec![
+                ("-o", Some(a.output.as_path())),
+                ("--png", a.png.as_deref()),
+                ("--json", a.json.as_deref()),
+            ],
+            a.naming,
+        ),
     };
     let paths_inside = outs.iter().all(|(_, p)| p.is_none_or(inside))
         && scene.is_none_or(|s| s.starts_with("demo:") || inside(Path::new(s)));
@@ -198,7 +209,7 @@ fuzz_target!(|data: &[u8]| {
             let depth = a.tuning.octree_depth;
             small_view(&mut a.view, depth).then(|| compare::run(&a).map_err(|e| e.to_string()))
         }
-        Command::Bench(_) => None,
+        Command::Bench(_) | Command::Lines(_) => None,
     };
     let changed = restore(files);
     if !changed.is_empty() {

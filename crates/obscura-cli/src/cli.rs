@@ -4,7 +4,7 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::{bench, compare, render};
+use crate::{bench, compare, lines, render};
 
 /// What can be seen? Clipping, culling and hidden-surface removal, every classical
 /// algorithm behind one interface.
@@ -27,4 +27,8 @@ pub enum Command {
     /// Time each algorithm over a sweep of face counts and fit the growth exponent.
     #[command(after_help = bench::EXAMPLES)]
     Bench(bench::BenchArgs),
+    /// Draw the visible (and hidden) lines of a scene or a height field as SVG for
+    /// people and pen plotters, with a PNG preview and the JSON of every edge.
+    #[command(after_help = lines::EXAMPLES)]
+    Lines(lines::LinesArgs),
 }

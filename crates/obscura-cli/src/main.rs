@@ -6,6 +6,7 @@ mod cli;
 mod common;
 mod compare;
 mod grid;
+mod lines;
 mod out;
 mod outputs;
 mod render;
@@ -30,6 +31,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Compare(args) => compare::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Lines(args) => lines::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

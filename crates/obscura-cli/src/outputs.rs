@@ -85,8 +85,9 @@ pub fn remove_temporaries_on_signal() {
 #[derive(Args, Debug, Clone, Copy, Default)]
 pub struct OutputArgs {
     /// Write outputs under any name. By default each output's extension must be its
-    /// format's: -o .png, --ids and --depth .npy, --stats-json and --json .json (a name
-    /// like mesh.obj is taken for a slip, not a wish to replace the mesh).
+    /// format's: -o .png (.svg for `lines`), --png .png, --ids and --depth .npy,
+    /// --stats-json and --json .json (a name like mesh.obj is taken for a slip, not a
+    /// wish to replace the mesh).
     #[arg(long)]
     pub force_extension: bool,
 }
@@ -95,6 +96,7 @@ pub struct OutputArgs {
 fn expected_extension(option: &str) -> Option<(&'static str, &'static str)> {
     match option {
         "-o" => Some(("png", "PNG images")),
+        "--png" => Some(("png", "PNG images")),
         "--ids" | "--depth" => Some(("npy", "NumPy arrays")),
         "--stats-json" | "--json" => Some(("json", "JSON")),
         _ => None,
@@ -179,6 +181,18 @@ impl Outputs {
         outputs: &[(&'static str, Option<&Path>)],
         naming: OutputArgs,
     ) -> Result<Self> {
+        Outputs::stage_with_extensions(input, outputs, naming, &[])
+    }
+
+    /// [`Outputs::stage`] where some options want another extension than the usual
+    /// one: each `(option, extension, what it writes)` (`obscura lines` writes SVG
+    /// with `-o`).
+    pub fn stage_with_extensions(
+        input: Option<&str>,
+        outputs: &[(&'static str, Option<&Path>)],
+        naming: OutputArgs,
+        extensions: &[(&'static str, &'static str, &'static str)],
+    ) -> Result<Self> {
         let given: Vec<(&'static str, &Path)> = outputs
             .iter()
             .filter_map(|&(o, p)| p.map(|p| (o, p)))
@@ -217,7 +231,12 @@ impl Outputs {
         // and pipes (`/dev/stdout`) have no extension to check.
         if !naming.force_extension {
             for &(option, path) in &given {
-                let Some((want, what)) = expected_extension(option) else {
+                let wanted = extensions
+                    .iter()
+                    .find(|(o, _, _)| *o == option)
+                    .map(|&(_, e, w)| (e, w))
+                    .or_else(|| expected_extension(option));
+                let Some((want, what)) = wanted else {
                     continue;
                 };
                 if fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {

@@ -13,14 +13,19 @@
 //!   two-space solution to the hidden line problem for plotting functions of two
 //!   variables"), with exact piecewise-linear horizons.
 //!
-//! A [`Drawing`] is independent of its output: [`svg`] writes it for people and pen
-//! plotters (layers, millimetres on a page, joined and ordered polylines).
+//! A [`Drawing`] is independent of its output: [`plot`] joins, cleans and orders its
+//! pieces into polylines, [`svg`] writes them for people and pen plotters (layers,
+//! millimetres on a page), [`preview`] rasterises them to a PNG, and [`json`] keeps
+//! every edge with its visible and hidden intervals for other tools.
 
 pub mod check;
 mod drawing;
 pub mod edges;
 pub mod hlr;
 pub mod horizon;
+pub mod json;
+pub mod plot;
+pub mod preview;
 pub mod roberts;
 pub mod svg;
 
