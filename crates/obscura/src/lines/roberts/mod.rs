@@ -1,0 +1,387 @@
+//! Roberts' algorithm for scenes of convex polyhedra (Roberts 1963, "Machine
+//! perception of three-dimensional solids", MIT Lincoln Laboratory TR 315), as seed 004
+//! gives it (its section "Алгоритм Робертса", with the two worked examples; the second
+//! corrected in `ALGORITHMS.md`).
+//!
+//! # Steps
+//! 1. **Bodies** ([`body`]): every object the view keeps must be a convex closed
+//!    polyhedron (else an error names it). Its *body matrix* has one column
+//!    `[a b c d]` per plane ([`body_matrix`]), signed so that the interior point (the
+//!    average of its vertices) gives a positive product. The columns are taken to the
+//!    view's transformed space by the inverse of the view transform (`V' = T^-1 V`,
+//!    perspective included): there every view is a parallel one with the viewer at
+//!    `+z` infinity, as in the seed. Planes with `E · V'_j < 0` for the test point at
+//!    infinity `E = (0, 0, -1, 0)` (the direction of view) are self-hidden
+//!    ([`self_hidden`]); an edge between two self-hidden planes is hidden by its own
+//!    body. The box of the transformed body is kept for the box tests.
+//! 2. **Priority and boxes**: bodies are sorted by the largest `z` of their
+//!    transformed vertices (farthest first, the seed's priority list). A body can hide
+//!    an edge only if their boxes overlap in `x` and `y` and the body's nearest `z` is
+//!    beyond the edge's farthest; when the `z` ranges overlap, the edge may pierce the
+//!    body (the seed's penetration flag).
+//! 3. **Edge against body** ([`edge_against_body`]): `h_j = p_j + t q_j + a w_j`
+//!    solved pairwise with the bounds `t = t0`, `t = t1` and, with the penetration
+//!    flag, `a = 0`; the hidden interval is `t_maxmin < t < t_minmax`. Only the pieces
+//!    still visible are tested against the remaining bodies (each piece with its own
+//!    `t` bounds).
+//! 4. **Penetration**: where an edge of one body enters or leaves another
+//!    (penetration points), and the lines joining them on a face of each body: the
+//!    intersection lines ([`EdgeKind::Intersection`]), tested against every body,
+//!    both of theirs included.
+//!
+//! # Output
+//! A [`Drawing`]: every edge between two planes that differ ([`EdgeKind::Crease`];
+//! edges between coplanar polygons, such as a square's diagonal, are not drawn) and
+//! every intersection line, cut into pieces with invisibility 0 (visible) or 1
+//! (hidden by one body or more: hidden pieces are not tested further, as in the seed,
+//! so the number of hiding bodies is not counted). Edges are clipped to the view
+//! volume; pieces are in pixel coordinates.
+//!
+//! # Departures from the seed, and why
+//! - The seed tests a body only against bodies of lower priority. A body whose
+//!   farthest point is nearer than the edge's nearest cannot hide it; others can,
+//!   whatever their priority (a long tilted slab is nearer than a box at one end and
+//!   farther at the other), so every body that passes the box and depth tests is
+//!   tested, in priority order.
+//! - Joins of penetration points: only those on a face of each body (see
+//!   [`penetration`]), which are the pieces of the intersection line.
+//! - A body that crosses the near plane hides only beyond it (the near plane is added
+//!   as one more column), as the surface algorithms clip it.
+//!
+//! # Complexity
+//! `O(E B j^3)` for `E` edges, `B` bodies that pass the box tests and `j` planes per
+//! body (the seed's pairwise solutions). 100 boxes at 1920x1080: see
+//! `benches/roberts.rs` and `docs/lines.md`.
+//!
+//! # Limitations
+//! Convex bodies only; tolerances are relative (1e-9 of the coordinates), so bodies
+//! touching along a face or an edge do not hide each other there.
+
+mod body;
+mod edge;
+mod penetration;
+
+pub use body::{body_matrix, self_hidden};
+pub use edge::{EdgeAgainstBody, edge_against_body};
+
+use glam::{DVec3, DVec4};
+
+use self::body::{Body, Space};
+use self::edge::{Row, edge_scale, hidden_interval, trivially_visible};
+use super::{Drawing, DrawnEdge, EdgeKind, Piece};
+use crate::{Result, View};
+
+/// Options of [`draw`].
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub struct RobertsOptions {
+    /// Find the intersection lines of bodies that pierce each other (stage 4).
+    pub intersections: bool,
+}
+
+impl Default for RobertsOptions {
+    fn default() -> Self {
+        RobertsOptions {
+            intersections: true,
+        }
+    }
+}
+
+/// What the drawing cost.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+#[non_exhaustive]
+pub struct RobertsStats {
+    /// Bodies (kept objects).
+    pub bodies: u64,
+    /// Planes of all bodies (body matrix columns).
+    pub planes: u64,
+    /// Self-hidden planes.
+    pub self_hidden_planes: u64,
+    /// Edges considered (body edges and intersection lines).
+    pub edges: u64,
+    /// Body edges hidden by their own body.
+    pub self_hidden_edges: u64,
+    /// Edge and body pairs that passed the box and depth tests.
+    pub edge_body_tests: u64,
+    /// Of those, pairs decided by one plane (the edge wholly visible).
+    pub trivially_visible: u64,
+    /// Pairs of bodies whose boxes overlap (penetration looked for).
+    pub penetration_pairs: u64,
+    /// Penetration points found.
+    pub penetration_points: u64,
+    /// Intersection lines (joins of penetration points).
+    pub intersection_lines: u64,
+    /// Pieces made.
+    pub pieces: u64,
+    /// Of those, visible.
+    pub visible_pieces: u64,
+}
+
+/// The direction to the viewer in the transformed space.
+const TOWARDS_VIEWER: DVec4 = DVec4::Z;
+
+/// Draws the edges of the convex bodies `view` keeps, hidden parts marked, with the
+/// intersection lines of bodies that pierce each other. Errors: an object that is not
+/// a convex closed polyhedron, named.
+///
+/// ```
+/// use obscura::{scene::{demo, Viewport}, view::{PrepareOptions, View}};
+/// use obscura::lines::roberts::{draw, RobertsOptions};
+/// let scene = demo::cube();
+/// let vp = Viewport::new(64, 48).unwrap();
+/// let view = View::new(&scene, &scene.default_camera(vp.aspect()), vp, &PrepareOptions::default()).unwrap();
+/// let (drawing, stats) = draw(&view, &RobertsOptions::default()).unwrap();
+/// // Seen from a corner: 9 visible edges, 3 hidden.
+/// assert_eq!(drawing.edges.len(), 12);
+/// assert_eq!(drawing.visible().count(), 9);
+/// assert_eq!(stats.self_hidden_edges, 3);
+/// ```
+pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsStats)> {
+    let space = Space::of(view);
+    let scene = view.scene();
+    let mut stats = RobertsStats::default();
+    let mut cache = body::AdjacencyCache::new();
+    let mut bodies: Vec<Body> = Vec::new();
+    let mut vertex_base = 0u32;
+    for (k, o) in scene.objects().iter().enumerate() {
+        if view.kept_objects()[k] {
+            let b = body::build(view, &space, k, vertex_base, &mut cache)?;
+            stats.planes += b.columns.len() as u64;
+            stats.self_hidden_planes += b.hidden.iter().filter(|&&h| h).count() as u64;
+            bodies.push(b);
+        }
+        vertex_base += o.mesh.positions().len() as u32;
+    }
+    stats.bodies = bodies.len() as u64;
+    // The seed's priority list: farthest (smallest largest z) first.
+    bodies.sort_by(|a, b| a.hi.z.total_cmp(&b.hi.z).then(a.object.cmp(&b.object)));
+
+    let mut drawing = Drawing::new(space.width as u32, space.height as u32);
+    let mut tester = Tester {
+        space: &space,
+        bodies: &bodies,
+        rows: Vec::new(),
+        visible: Vec::new(),
+        next: Vec::new(),
+    };
+    for (i, b) in bodies.iter().enumerate() {
+        for e in &b.edges {
+            let edge = DrawnEdge {
+                vertices: Some(e.vertices),
+                object: Some(b.object as u32),
+                kind: EdgeKind::Crease,
+                faces: [Some(e.polygons[0]), Some(e.polygons[1])],
+                world: e.world,
+            };
+            let own = b.hidden[e.planes[0]] && b.hidden[e.planes[1]];
+            if own {
+                stats.self_hidden_edges += 1;
+            }
+            tester.add(&mut drawing, &mut stats, edge, Some(i), own);
+        }
+    }
+    if options.intersections {
+        for i in 0..bodies.len() {
+            for j in i + 1..bodies.len() {
+                let (a, b) = (&bodies[i], &bodies[j]);
+                if !a.world.overlaps(&b.world) {
+                    continue;
+                }
+                stats.penetration_pairs += 1;
+                let (points, joins) = penetration::joins(&space, a, b);
+                stats.penetration_points += points as u64;
+                for jn in joins {
+                    stats.intersection_lines += 1;
+                    let mid = 0.5 * (jn.world[0] + jn.world[1]);
+                    let edge = DrawnEdge {
+                        vertices: None,
+                        object: Some(a.object.min(b.object) as u32),
+                        kind: EdgeKind::Intersection,
+                        faces: [
+                            Some(polygon_at(view, a, jn.planes[0], mid)),
+                            Some(polygon_at(view, b, jn.planes[1], mid)),
+                        ],
+                        world: jn.world,
+                    };
+                    tester.add(&mut drawing, &mut stats, edge, None, false);
+                }
+            }
+        }
+    }
+    stats.edges = drawing.edges.len() as u64;
+    stats.pieces = drawing.pieces.len() as u64;
+    stats.visible_pieces = drawing.visible().count() as u64;
+    Ok((drawing, stats))
+}
+
+/// The scene polygon of `body` on plane `plane` that holds the world point `p` (the
+/// first of the plane's polygons when rounding puts it in none).
+fn polygon_at(view: &View, body: &Body, plane: usize, p: DVec3) -> u32 {
+    let polys = &body.plane_polygons[plane];
+    let o = &view.scene().objects()[body.object];
+    let base = view.polygon_base()[body.object];
+    for &g in polys {
+        let pts = o.world_polygon((g - base) as usize);
+        let n = crate::geom::newell_normal(&pts);
+        let inside = (0..pts.len()).all(|i| {
+            let (a, b) = (pts[i], pts[(i + 1) % pts.len()]);
+            (b - a).cross(p - a).dot(n) >= -1e-9 * (b - a).length_squared() * n.length()
+        });
+        if inside {
+            return g;
+        }
+    }
+    polys[0]
+}
+
+/// The hiding tests of stage 2, with their scratch space.
+struct Tester<'a> {
+    space: &'a Space,
+    bodies: &'a [Body],
+    rows: Vec<Row>,
+    visible: Vec<(f64, f64)>,
+    next: Vec<(f64, f64)>,
+}
+
+impl Tester<'_> {
+    /// Adds `edge` to the drawing with its pieces: clipped to the view volume, then
+    /// (unless `own_hidden`) tested against every body but `own` that may hide it.
+    fn add(
+        &mut self,
+        drawing: &mut Drawing,
+        stats: &mut RobertsStats,
+        edge: DrawnEdge,
+        own: Option<usize>,
+        own_hidden: bool,
+    ) {
+        let index = drawing.edges.len() as u32;
+        drawing.edges.push(edge);
+        let s = self.space.point(edge.world[0]);
+        let d = self.space.point(edge.world[1]) - s;
+        let Some((t0, t1)) = clip_to_view(s, d) else {
+            return;
+        };
+        self.visible.clear();
+        if !own_hidden {
+            self.visible.push((t0, t1));
+            self.hide(stats, s, d, t0, t1, own);
+        }
+        // Pieces: the visible intervals and the gaps between them.
+        let mut at = t0;
+        let piece = |a: f64, b: f64, invisibility: u32| Piece {
+            edge: index,
+            t: [a, b],
+            points: [self.space.pixel(s + d * a), self.space.pixel(s + d * b)],
+            invisibility,
+        };
+        for &(a, b) in &self.visible {
+            if a > at {
+                drawing.pieces.push(piece(at, a, 1));
+            }
+            drawing.pieces.push(piece(a, b, 0));
+            at = b;
+        }
+        if at < t1 {
+            drawing.pieces.push(piece(at, t1, 1));
+        }
+    }
+
+    /// Removes from `self.visible` what the bodies hide.
+    fn hide(
+        &mut self,
+        stats: &mut RobertsStats,
+        s: DVec4,
+        d: DVec4,
+        t0: f64,
+        t1: f64,
+        own: Option<usize>,
+    ) {
+        let (a, b) = (s + d * t0, s + d * t1);
+        let (pa, pb) = (a.truncate() / a.w, b.truncate() / b.w);
+        let (lo, hi) = (pa.min(pb), pa.max(pb));
+        let scale = edge_scale(s, d);
+        for (i, body) in self.bodies.iter().enumerate() {
+            if Some(i) == own {
+                continue;
+            }
+            // Box tests (x, y), then depth: the body must reach nearer than the edge's
+            // farthest point.
+            if body.lo.x > hi.x
+                || body.hi.x < lo.x
+                || body.lo.y > hi.y
+                || body.hi.y < lo.y
+                || body.hi.z <= lo.z
+            {
+                continue;
+            }
+            let penetration = body.lo.z <= hi.z;
+            stats.edge_body_tests += 1;
+            self.rows.clear();
+            self.rows.extend(body.hiding.iter().map(|v| Row {
+                p: s.dot(*v),
+                q: d.dot(*v),
+                w: TOWARDS_VIEWER.dot(*v),
+            }));
+            if trivially_visible(&self.rows, t0, t1) {
+                stats.trivially_visible += 1;
+                continue;
+            }
+            self.next.clear();
+            for &(ta, tb) in &self.visible {
+                match hidden_interval(&self.rows, ta, tb, penetration, scale) {
+                    None => self.next.push((ta, tb)),
+                    Some((ha, hb)) => {
+                        if ha > ta {
+                            self.next.push((ta, ha));
+                        }
+                        if hb < tb {
+                            self.next.push((hb, tb));
+                        }
+                    }
+                }
+            }
+            std::mem::swap(&mut self.visible, &mut self.next);
+            if self.visible.is_empty() {
+                return;
+            }
+        }
+    }
+}
+
+/// The part of the edge `s + t d` (`0 <= t <= 1`) inside the view volume `-w <= x, y,
+/// z <= w` (Liang-Barsky in homogeneous coordinates); `None` when it is empty or a
+/// point.
+fn clip_to_view(s: DVec4, d: DVec4) -> Option<(f64, f64)> {
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    let e = s + d;
+    for k in 0..3 {
+        for sign in [1.0, -1.0] {
+            // f = w + sign * x_k >= 0.
+            let f0 = s.w + sign * s[k];
+            let f1 = e.w + sign * e[k];
+            if f0 < 0.0 && f1 < 0.0 {
+                return None;
+            }
+            if f0 < 0.0 {
+                t0 = t0.max(f0 / (f0 - f1));
+            } else if f1 < 0.0 {
+                t1 = t1.min(f0 / (f0 - f1));
+            }
+        }
+    }
+    (t1 - t0 > 1e-12).then_some((t0, t1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clipping_keeps_the_inside_part() {
+        // From x/w = -2 to x/w = 2 at w = 1: the middle half is inside.
+        let s = DVec4::new(-2.0, 0.0, 0.0, 1.0);
+        let d = DVec4::new(4.0, 0.0, 0.0, 0.0);
+        assert_eq!(clip_to_view(s, d), Some((0.25, 0.75)));
+        assert_eq!(clip_to_view(DVec4::new(2.0, 0.0, 0.0, 1.0), DVec4::X), None);
+    }
+}
