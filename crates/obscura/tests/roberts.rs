@@ -1,0 +1,540 @@
+//! Roberts' algorithm (lines::roberts): seed 004's worked examples with the corrected
+//! values of ALGORITHMS.md, and drawings of boxes checked against an independent
+//! sampling reference (points along every piece, the segment to the viewer cut
+//! analytically against every box).
+
+use glam::{DMat4, DQuat, DVec3, DVec4};
+use obscura::lines::roberts::{RobertsOptions, body_matrix, draw, edge_against_body, self_hidden};
+use obscura::lines::{Drawing, EdgeKind};
+use obscura::rng::SplitMix64;
+use obscura::scene::{Camera, ObjectDesc, Scene, Viewport, demo};
+use obscura::view::{PrepareOptions, View};
+
+/// The seed's corrected body matrix of the unit cube centred at the origin:
+/// -2x+1, 2x+1, -2y+1, 2y+1, -2z+1, 2z+1 (all >= 0 inside).
+fn seed_cube() -> [DVec4; 6] {
+    [
+        DVec4::new(-2.0, 0.0, 0.0, 1.0),
+        DVec4::new(2.0, 0.0, 0.0, 1.0),
+        DVec4::new(0.0, -2.0, 0.0, 1.0),
+        DVec4::new(0.0, 2.0, 0.0, 1.0),
+        DVec4::new(0.0, 0.0, -2.0, 1.0),
+        DVec4::new(0.0, 0.0, 2.0, 1.0),
+    ]
+}
+
+/// The viewer at +z infinity: the direction towards it.
+const G: DVec4 = DVec4::new(0.0, 0.0, 1.0, 0.0);
+
+#[test]
+fn seed_body_matrix_and_self_hidden_face() {
+    // The uncorrected matrix of the seed (2x - 1, ... as printed) and the interior
+    // point (1, 1, 1, 4): the products (-2, 6, -2, 6, -2, 6).
+    let printed = [
+        DVec4::new(2.0, 0.0, 0.0, -1.0),
+        DVec4::new(2.0, 0.0, 0.0, 1.0),
+        DVec4::new(0.0, 2.0, 0.0, -1.0),
+        DVec4::new(0.0, 2.0, 0.0, 1.0),
+        DVec4::new(0.0, 0.0, 2.0, -1.0),
+        DVec4::new(0.0, 0.0, 2.0, 1.0),
+    ];
+    let s = DVec4::new(1.0, 1.0, 1.0, 4.0);
+    let products: Vec<f64> = printed.iter().map(|c| s.dot(*c)).collect();
+    assert_eq!(products, [-2.0, 6.0, -2.0, 6.0, -2.0, 6.0]);
+
+    // body_matrix on the cube's faces in the seed's order (x = 1/2, x = -1/2, y =
+    // 1/2, ...) gives the corrected columns, halved (unit normals).
+    let cube = demo::box_mesh(DVec3::splat(-0.5), DVec3::splat(0.5));
+    // box_mesh's faces: -x, +x, -y, +y, -z, +z; the seed's: +x, -x, +y, -y, +z, -z.
+    let polygons: Vec<Vec<DVec3>> = [1, 0, 3, 2, 5, 4]
+        .iter()
+        .map(|&i| cube.polygon_points(i))
+        .collect();
+    let (columns, of_polygon) = body_matrix(&polygons);
+    assert_eq!(of_polygon, (0..6).map(Some).collect::<Vec<_>>());
+    let doubled: Vec<DVec4> = columns.iter().map(|c| *c * 2.0).collect();
+    assert_eq!(doubled, seed_cube());
+
+    // Viewer at +z, looking down -z: E = (0, 0, -1, 0) gives (0, 0, 0, 0, 2, -2), so
+    // face 6 (z = -1/2) is self-hidden.
+    let e = DVec4::new(0.0, 0.0, -1.0, 0.0);
+    let products: Vec<f64> = seed_cube().iter().map(|c| e.dot(*c)).collect();
+    assert_eq!(products, [0.0, 0.0, 0.0, 0.0, 2.0, -2.0]);
+    assert_eq!(
+        self_hidden(&seed_cube(), e),
+        [false, false, false, false, false, true]
+    );
+}
+
+#[test]
+fn seed_example_hidden_segment() {
+    // ALGORITHMS.md example 2: the segment (-2, 0, -2)-(2, 0, -2) behind the cube.
+    let s = DVec4::new(-2.0, 0.0, -2.0, 1.0);
+    let d = DVec4::new(4.0, 0.0, 0.0, 0.0);
+    for penetration in [false, true] {
+        let r = edge_against_body(&seed_cube(), s, d, G, penetration);
+        assert_eq!(r.p, [5.0, -3.0, 1.0, 1.0, 5.0, -3.0]);
+        assert_eq!(r.q, [-8.0, 8.0, 0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(r.w, [0.0, 0.0, 0.0, 0.0, -2.0, 2.0]);
+        assert!(!r.trivially_visible);
+        assert_eq!(r.hidden, Some((3.0 / 8.0, 5.0 / 8.0)), "{penetration}");
+    }
+}
+
+#[test]
+fn seed_example_penetrating_segment_corrected() {
+    // ALGORITHMS.md example 3 (the seed's slides print other vectors): the segment
+    // (-1, 0, -2)-(1, 0, 2) through the cube.
+    let s = DVec4::new(-1.0, 0.0, -2.0, 1.0);
+    let d = DVec4::new(2.0, 0.0, 4.0, 0.0);
+    let r = edge_against_body(&seed_cube(), s, d, G, true);
+    assert_eq!(r.p, [3.0, -1.0, 1.0, 1.0, 5.0, -3.0]);
+    assert_eq!(r.q, [-4.0, 4.0, 0.0, 0.0, -8.0, 8.0]);
+    assert_eq!(r.w, [0.0, 0.0, 0.0, 0.0, -2.0, 2.0]);
+    // Hidden for 1/4 < t < 5/8: behind the cube from 1/4, inside from 3/8 (entering
+    // through the back face), out through the front face at 5/8.
+    assert_eq!(r.hidden, Some((1.0 / 4.0, 5.0 / 8.0)));
+    // Without the bound a = 0 the corners (3/8, 0) and (5/8, 0) are not found: the
+    // remaining corners all have t = 1/4, and nothing is hidden. This is why the seed
+    // adds a = 0 when the edge may pierce the body.
+    let r = edge_against_body(&seed_cube(), s, d, G, false);
+    assert_eq!(r.hidden, None);
+}
+
+#[test]
+fn segment_beside_or_in_front_of_the_cube_is_visible() {
+    // In front (z = 2): the plane -2z + 1 is negative all along and falls towards
+    // the viewer, so the edge is wholly visible by it alone.
+    let r = edge_against_body(
+        &seed_cube(),
+        DVec4::new(-2.0, 0.0, 2.0, 1.0),
+        DVec4::new(4.0, 0.0, 0.0, 0.0),
+        G,
+        true,
+    );
+    assert!(r.trivially_visible);
+    assert_eq!(r.hidden, None);
+    // Behind but beside (y = 2): never inside.
+    let r = edge_against_body(
+        &seed_cube(),
+        DVec4::new(-2.0, 2.0, -2.0, 1.0),
+        DVec4::new(4.0, 0.0, 0.0, 0.0),
+        G,
+        true,
+    );
+    assert_eq!(r.hidden, None);
+    // Lying on the back face (z = -1/2) across it: the face is behind the segment's
+    // own points, nothing is in front of them.
+    let r = edge_against_body(
+        &seed_cube(),
+        DVec4::new(-1.0, 0.0, 0.5, 1.0),
+        DVec4::new(2.0, 0.0, 0.0, 0.0),
+        G,
+        true,
+    );
+    assert_eq!(r.hidden, None);
+}
+
+// ---------------------------------------------------------------------------------
+// Drawings against a sampling reference.
+
+/// A box: centre, half extents, rotation.
+#[derive(Clone, Copy, Debug)]
+struct Boxed {
+    centre: DVec3,
+    half: DVec3,
+    rotation: DQuat,
+}
+
+impl Boxed {
+    fn transform(&self) -> DMat4 {
+        DMat4::from_rotation_translation(self.rotation, self.centre)
+    }
+
+    /// The open interval of `u` in `(0, u_max]` where `o + u dir` is strictly inside
+    /// (slabs in the box's frame), as a length in `u`.
+    fn inside_length(&self, o: DVec3, dir: DVec3, u_max: f64) -> f64 {
+        let inv = self.rotation.inverse();
+        let (o, dir) = (inv * (o - self.centre), inv * dir);
+        let (mut lo, mut hi) = (0.0f64, u_max);
+        for k in 0..3 {
+            if dir[k] == 0.0 {
+                if o[k].abs() >= self.half[k] {
+                    return 0.0;
+                }
+                continue;
+            }
+            let a = (-self.half[k] - o[k]) / dir[k];
+            let b = (self.half[k] - o[k]) / dir[k];
+            lo = lo.max(a.min(b));
+            hi = hi.min(a.max(b));
+        }
+        (hi - lo).max(0.0)
+    }
+}
+
+fn scene_of(boxes: &[Boxed]) -> Scene {
+    let mut scene = Scene::new();
+    for (i, b) in boxes.iter().enumerate() {
+        let desc = ObjectDesc::new(format!("box{i}"), demo::box_mesh(-b.half, b.half))
+            .with_transform(b.transform());
+        scene.add(desc).unwrap();
+    }
+    scene
+}
+
+fn random_boxes(rng: &mut SplitMix64, n: usize, spread: f64) -> Vec<Boxed> {
+    (0..n)
+        .map(|_| Boxed {
+            centre: DVec3::new(
+                rng.range(-spread, spread),
+                rng.range(-spread, spread),
+                rng.range(-spread, spread),
+            ),
+            half: DVec3::new(
+                rng.range(0.3, 1.2),
+                rng.range(0.3, 1.2),
+                rng.range(0.3, 1.2),
+            ),
+            rotation: DQuat::from_euler(
+                glam::EulerRot::XYZ,
+                rng.range(0.0, 6.3),
+                rng.range(0.0, 6.3),
+                rng.range(0.0, 6.3),
+            ),
+        })
+        .collect()
+}
+
+/// Whether the world point `p` is hidden, by the reference: the segment to the eye
+/// (perspective) or the ray towards the viewer (parallel) passes strictly through some
+/// box for a length above `margin`. `None` when it is too close to call.
+fn reference_hidden(boxes: &[Boxed], camera: &Camera, p: DVec3) -> Option<bool> {
+    let (dir, u_max) = if matches!(camera.projection, obscura::Projection::Orthographic { .. }) {
+        ((camera.eye - camera.target).normalize(), 1e3)
+    } else {
+        (camera.eye - p, 1.0)
+    };
+    let scale = dir.length() * u_max;
+    let deepest = boxes
+        .iter()
+        .map(|b| b.inside_length(p, dir, u_max) * scale)
+        .fold(0.0, f64::max);
+    if deepest > 1e-3 {
+        Some(true)
+    } else if deepest < 1e-9 {
+        Some(false)
+    } else {
+        None
+    }
+}
+
+/// Checks every piece of a drawing at interior points against the reference; returns
+/// the number of points compared.
+fn check(drawing: &Drawing, boxes: &[Boxed], camera: &Camera, label: &str) -> usize {
+    let mut compared = 0;
+    for piece in &drawing.pieces {
+        let edge = &drawing.edges[piece.edge as usize];
+        let [a, b] = piece.t;
+        if piece.length() < 2.0 {
+            continue;
+        }
+        for f in [0.1, 0.3, 0.5, 0.7, 0.9] {
+            let t = a + (b - a) * f;
+            let p = edge.point(t);
+            // Near a change of visibility the reference cannot call it either way.
+            let near: Vec<Option<bool>> = [-1e-4, 0.0, 1e-4]
+                .iter()
+                .map(|dt| reference_hidden(boxes, camera, edge.point(t + dt)))
+                .collect();
+            if near.iter().any(Option::is_none) || near[0] != near[1] || near[1] != near[2] {
+                continue;
+            }
+            let hidden = near[1].unwrap();
+            assert_eq!(
+                hidden,
+                !piece.is_visible(),
+                "{label}: edge {} ({:?}) at t = {t} (piece {:?}, point {p})",
+                piece.edge,
+                edge.kind,
+                piece.t
+            );
+            compared += 1;
+        }
+    }
+    compared
+}
+
+/// Pieces of each edge are contiguous and increasing, and cover the whole edge when
+/// the edge is inside the view.
+fn check_pieces_tile_edges(drawing: &Drawing) {
+    let mut last: Option<(u32, f64)> = None;
+    for p in &drawing.pieces {
+        assert!(p.t[0] < p.t[1]);
+        if let Some((e, t)) = last {
+            if e == p.edge {
+                assert!((p.t[0] - t).abs() < 1e-12, "gap in edge {e}");
+            }
+        }
+        last = Some((p.edge, p.t[1]));
+    }
+}
+
+fn view<'s>(scene: &'s Scene, camera: &Camera, w: u32, h: u32) -> View<'s> {
+    View::new(
+        scene,
+        camera,
+        Viewport::new(u64::from(w), u64::from(h)).unwrap(),
+        &PrepareOptions::default(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn random_boxes_match_the_sampling_reference() {
+    let mut rng = SplitMix64(23);
+    let mut total = 0;
+    for round in 0..8 {
+        let boxes = random_boxes(&mut rng, 6, 2.0);
+        let scene = scene_of(&boxes);
+        let dir = DVec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        )
+        .normalize();
+        let camera = if round % 2 == 0 {
+            Camera::perspective(dir * 14.0, DVec3::ZERO, DVec3::Y, 45.0, 0.5, 100.0)
+        } else {
+            Camera::orthographic(dir * 14.0, DVec3::ZERO, DVec3::Y, 9.0, 0.5, 100.0)
+        };
+        let v = view(&scene, &camera, 320, 240);
+        let (drawing, stats) = draw(&v, &RobertsOptions::default()).unwrap();
+        check_pieces_tile_edges(&drawing);
+        let label = format!("round {round} ({stats:?})");
+        let n = check(&drawing, &boxes, &camera, &label);
+        assert!(n > 100, "{label}: only {n} points compared");
+        assert!(
+            drawing.visible().count() > 0 && drawing.hidden().count() > 0,
+            "{label}"
+        );
+        total += n;
+    }
+    assert!(total > 2000, "{total}");
+}
+
+#[test]
+fn self_hidden_planes_are_the_views_back_faces() {
+    let mut rng = SplitMix64(5);
+    for round in 0..4 {
+        let boxes = random_boxes(&mut rng, 3, 3.0);
+        let scene = scene_of(&boxes);
+        let camera = if round % 2 == 0 {
+            Camera::perspective(
+                DVec3::new(3.0, 5.0, 12.0),
+                DVec3::ZERO,
+                DVec3::Y,
+                50.0,
+                0.5,
+                80.0,
+            )
+        } else {
+            Camera::orthographic(
+                DVec3::new(-7.0, 4.0, 9.0),
+                DVec3::ZERO,
+                DVec3::Y,
+                12.0,
+                0.5,
+                80.0,
+            )
+        };
+        let v = view(&scene, &camera, 160, 120);
+        let (drawing, stats) = draw(&v, &RobertsOptions::default()).unwrap();
+        // A box shows 1 to 3 faces: 3 to 5 back faces... each box has 6 planes.
+        assert_eq!(stats.planes, 18);
+        let back = v.back_facing().iter().filter(|&&b| b).count() as u64;
+        assert_eq!(stats.self_hidden_planes, back, "round {round}");
+        // An edge is self-hidden exactly when both its polygons are back faces.
+        let hidden_by_faces = drawing
+            .edges
+            .iter()
+            .filter(|e| e.faces.iter().all(|f| v.back_facing()[f.unwrap() as usize]))
+            .count() as u64;
+        assert_eq!(stats.self_hidden_edges, hidden_by_faces);
+    }
+}
+
+#[test]
+fn unit_cube_from_a_corner_shows_nine_edges() {
+    let scene = demo::cube();
+    for camera in [
+        Camera::orthographic(DVec3::splat(5.0), DVec3::ZERO, DVec3::Y, 3.0, 0.5, 20.0),
+        Camera::perspective(DVec3::splat(5.0), DVec3::ZERO, DVec3::Y, 40.0, 0.5, 20.0),
+    ] {
+        let v = view(&scene, &camera, 200, 200);
+        let (d, _) = draw(&v, &RobertsOptions::default()).unwrap();
+        assert_eq!(d.edges.len(), 12);
+        assert!(d.edges.iter().all(|e| e.kind == EdgeKind::Crease));
+        assert_eq!(d.visible().count(), 9);
+        assert_eq!(d.hidden().count(), 3);
+        // Whole edges, pixel coordinates inside the picture.
+        for p in &d.pieces {
+            assert_eq!(p.t, [0.0, 1.0]);
+            for q in p.points {
+                assert!((0.0..=200.0).contains(&q.x) && (0.0..=200.0).contains(&q.y));
+            }
+        }
+    }
+}
+
+#[test]
+fn triangulated_faces_draw_no_diagonals() {
+    // The cube as 12 triangles: the diagonals lie between coplanar triangles.
+    let cube = demo::box_mesh(DVec3::splat(-0.5), DVec3::splat(0.5));
+    let mut b = obscura::scene::MeshBuilder::new();
+    for p in cube.positions() {
+        b.push_position(*p);
+    }
+    for i in 0..6 {
+        let f = cube.polygon(i);
+        b.push_face(&[f[0], f[1], f[2]], None).unwrap();
+        b.push_face(&[f[0], f[2], f[3]], None).unwrap();
+    }
+    let (mesh, _) = b.finish();
+    let mut scene = Scene::new();
+    scene.add(ObjectDesc::new("triangles", mesh)).unwrap();
+    let camera = Camera::perspective(
+        DVec3::new(2.0, 3.0, 4.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        40.0,
+        0.5,
+        20.0,
+    );
+    let v = view(&scene, &camera, 100, 100);
+    let (d, stats) = draw(&v, &RobertsOptions::default()).unwrap();
+    assert_eq!(d.edges.len(), 12);
+    assert_eq!(stats.planes, 6);
+    assert_eq!(d.visible().count(), 9);
+}
+
+#[test]
+fn interpenetrating_boxes_give_their_penetration_lines() {
+    // B pokes out of A's +x face (x = 1): the intersection line is the square
+    // x = 1, y and z in [-0.25, 0.25].
+    let boxes = [
+        Boxed {
+            centre: DVec3::ZERO,
+            half: DVec3::splat(1.0),
+            rotation: DQuat::IDENTITY,
+        },
+        Boxed {
+            centre: DVec3::new(1.5, 0.0, 0.0),
+            half: DVec3::new(1.0, 0.25, 0.25),
+            rotation: DQuat::IDENTITY,
+        },
+    ];
+    let scene = scene_of(&boxes);
+    let camera = Camera::perspective(
+        DVec3::new(6.0, 3.0, 5.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        40.0,
+        0.5,
+        30.0,
+    );
+    let v = view(&scene, &camera, 300, 300);
+    let (d, stats) = draw(&v, &RobertsOptions::default()).unwrap();
+    let lines: Vec<_> = d
+        .edges
+        .iter()
+        .filter(|e| e.kind == EdgeKind::Intersection)
+        .collect();
+    assert_eq!(lines.len(), 4, "{stats:?}");
+    // B's four long edges leave A through its +x face.
+    assert_eq!(stats.penetration_points, 4);
+    let mut corners: Vec<[i64; 2]> = Vec::new();
+    for e in &lines {
+        for p in e.world {
+            assert!((p.x - 1.0).abs() < 1e-12, "{p}");
+            assert!((p.y.abs() - 0.25).abs() < 1e-12 && (p.z.abs() - 0.25).abs() < 1e-12);
+            corners.push([(p.y * 4.0).round() as i64, (p.z * 4.0).round() as i64]);
+        }
+        assert_eq!(e.object, Some(0));
+        // The polygons: A's +x face (polygon 1) and one of B's four sides.
+        assert_eq!(e.faces[0], Some(1));
+        assert!(matches!(e.faces[1], Some(8..=11)), "{:?}", e.faces);
+    }
+    corners.sort();
+    corners.dedup();
+    assert_eq!(corners.len(), 4);
+    // Seen from +x, +y, +z: the line's two sides facing the viewer (+y, +z) are
+    // visible, the two others hidden by B itself.
+    let visible_lines = lines
+        .iter()
+        .filter(|e| {
+            let m = e.point(0.5);
+            m.y > 0.2 || m.z > 0.2
+        })
+        .count();
+    assert_eq!(visible_lines, 2);
+    for piece in &d.pieces {
+        let e = &d.edges[piece.edge as usize];
+        if e.kind == EdgeKind::Intersection {
+            let m = e.point(0.5);
+            assert_eq!(piece.is_visible(), m.y > 0.2 || m.z > 0.2, "{m}");
+        }
+    }
+    // B's edges inside A are hidden, and all of it checks against the reference.
+    check_pieces_tile_edges(&d);
+    assert!(check(&d, &boxes, &camera, "interpenetrating") > 50);
+    // Without intersections: only the 24 box edges.
+    let mut options = RobertsOptions::default();
+    options.intersections = false;
+    let (d, _) = draw(&v, &options).unwrap();
+    assert_eq!(d.edges.len(), 24);
+}
+
+#[test]
+fn non_convex_input_is_refused_by_name() {
+    let mut scene = Scene::new();
+    scene
+        .add(ObjectDesc::new(
+            "box",
+            demo::box_mesh(DVec3::splat(-1.0), DVec3::splat(1.0)),
+        ))
+        .unwrap();
+    scene
+        .add(
+            ObjectDesc::new("doughnut", demo::torus_mesh(1.0, 0.3, 16, 8))
+                .with_transform(DMat4::from_translation(DVec3::new(0.0, 0.0, 3.0))),
+        )
+        .unwrap();
+    let camera = Camera::perspective(
+        DVec3::new(0.0, 2.0, 12.0),
+        DVec3::new(0.0, 0.0, 1.5),
+        DVec3::Y,
+        50.0,
+        0.5,
+        50.0,
+    );
+    let v = view(&scene, &camera, 64, 64);
+    let err = draw(&v, &RobertsOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("doughnut") && err.contains("convex"), "{err}");
+    // A convex flag forced on a non-convex mesh is refused too.
+    let mut scene = Scene::new();
+    scene
+        .add(
+            ObjectDesc::new("liar", demo::torus_mesh(1.0, 0.3, 16, 8))
+                .with_convex(true)
+                .with_closed(true),
+        )
+        .unwrap();
+    let v = view(&scene, &camera, 64, 64);
+    let err = draw(&v, &RobertsOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("liar"), "{err}");
+}
