@@ -193,8 +193,9 @@ pub(super) struct Body {
     pub world: crate::geom::Aabb,
 }
 
-/// Edge adjacency per mesh, computed once for meshes shared by several objects.
-pub(super) type AdjacencyCache = HashMap<*const Mesh, EdgeAdjacency>;
+/// Edge adjacency and convexity per mesh, computed once for meshes shared by several
+/// objects (the city demo's buildings are one box mesh).
+pub(super) type AdjacencyCache = HashMap<*const Mesh, (EdgeAdjacency, bool)>;
 
 /// Builds the body of scene object `k`, refusing one that is not a convex closed
 /// polyhedron.
@@ -207,10 +208,13 @@ pub(super) fn build(
 ) -> Result<Body> {
     let object: &Object = &view.scene().objects()[k];
     let mesh = &object.mesh;
-    let adjacency = cache
-        .entry(Arc::as_ptr(mesh))
-        .or_insert_with(|| EdgeAdjacency::new(mesh));
-    if !object.convex || !is_convex_closed(mesh, adjacency, 1e-9) {
+    let (adjacency, convex) = cache.entry(Arc::as_ptr(mesh)).or_insert_with(|| {
+        let a = EdgeAdjacency::new(mesh);
+        let convex = is_convex_closed(mesh, &a, 1e-9);
+        (a, convex)
+    });
+    // The object's flag may have been set by hand: the mesh is checked too.
+    if !object.convex || !*convex {
         return Err(Error::InvalidObject {
             object: object.name.clone(),
             message: "Roberts' algorithm draws convex closed polyhedra only, and this \
