@@ -210,10 +210,13 @@ fn random_boxes(rng: &mut SplitMix64, n: usize, spread: f64) -> Vec<Boxed> {
 /// (perspective) or the ray towards the viewer (parallel) passes strictly through some
 /// box for a length above `margin`. `None` when it is too close to call.
 fn reference_hidden(boxes: &[Boxed], camera: &Camera, p: DVec3) -> Option<bool> {
+    // Only what lies beyond the near plane hides, as the view clips it.
+    let forward = (camera.target - camera.eye).normalize();
+    let depth = (p - camera.eye).dot(forward);
     let (dir, u_max) = if matches!(camera.projection, obscura::Projection::Orthographic { .. }) {
-        ((camera.eye - camera.target).normalize(), 1e3)
+        (-forward, depth - camera.near)
     } else {
-        (camera.eye - p, 1.0)
+        (camera.eye - p, 1.0 - camera.near / depth)
     };
     let scale = dir.length() * u_max;
     let deepest = boxes
@@ -537,4 +540,60 @@ fn non_convex_input_is_refused_by_name() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("liar"), "{err}");
+}
+
+#[test]
+fn a_box_across_the_near_plane_hides_only_beyond_it() {
+    // B spans depths 2..4 with the near plane at 3.5: beyond it, it covers
+    // |x / depth| <= 1.5 / 3.5 = 0.43; the whole of it would cover up to 0.75. A's
+    // front edges at x = +-5.5, depth 9.5 (0.58) are visible.
+    let boxes = [
+        Boxed {
+            centre: DVec3::ZERO,
+            half: DVec3::new(5.5, 5.5, 0.5),
+            rotation: DQuat::IDENTITY,
+        },
+        Boxed {
+            centre: DVec3::new(0.0, 0.0, 7.0),
+            half: DVec3::new(1.5, 1.5, 1.0),
+            rotation: DQuat::IDENTITY,
+        },
+    ];
+    let scene = scene_of(&boxes);
+    let camera = Camera::perspective(
+        DVec3::new(0.0, 0.0, 10.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        90.0,
+        3.5,
+        50.0,
+    );
+    let v = view(&scene, &camera, 200, 200);
+    let (d, _) = draw(&v, &RobertsOptions::default()).unwrap();
+    check_pieces_tile_edges(&d);
+    assert!(check(&d, &boxes, &camera, "near plane") > 20);
+    // A's four front edges (z = 0.5) are wholly visible.
+    let front: Vec<_> = d
+        .pieces
+        .iter()
+        .filter(|p| {
+            let e = &d.edges[p.edge as usize];
+            e.object == Some(0) && e.world.iter().all(|w| w.z == 0.5)
+        })
+        .collect();
+    assert_eq!(front.len(), 4);
+    assert!(front.iter().all(|p| p.is_visible() && p.t == [0.0, 1.0]));
+    // B's edges are clipped at the near plane: nothing of them nearer than 3.5.
+    for p in &d.pieces {
+        let e = &d.edges[p.edge as usize];
+        if e.object == Some(1) {
+            for t in p.t {
+                assert!(
+                    10.0 - e.point(t).z >= 3.5 * (1.0 - 1e-6),
+                    "{:?}",
+                    e.point(t)
+                );
+            }
+        }
+    }
 }
