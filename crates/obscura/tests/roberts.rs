@@ -594,3 +594,42 @@ fn a_box_across_the_near_plane_hides_only_beyond_it() {
         }
     }
 }
+
+#[test]
+fn boxes_touching_along_a_face_hide_nothing_there() {
+    // A unit box with another stacked on it: seen from (3, 4, 5), the upper box shows
+    // 9 edges, the lower 7 (its top face's far edges lie on the upper box's far
+    // bottom edges and are hidden by it); the two seams are drawn by both boxes.
+    let boxes = [
+        Boxed {
+            centre: DVec3::splat(0.5),
+            half: DVec3::splat(0.5),
+            rotation: DQuat::IDENTITY,
+        },
+        Boxed {
+            centre: DVec3::new(0.5, 1.5, 0.5),
+            half: DVec3::splat(0.5),
+            rotation: DQuat::IDENTITY,
+        },
+    ];
+    let scene = scene_of(&boxes);
+    let camera = Camera::perspective(
+        DVec3::new(3.0, 4.0, 5.0),
+        DVec3::new(0.5, 1.0, 0.5),
+        DVec3::Y,
+        40.0,
+        0.5,
+        30.0,
+    );
+    let v = view(&scene, &camera, 300, 300);
+    let (d, stats) = draw(&v, &RobertsOptions::default()).unwrap();
+    check_pieces_tile_edges(&d);
+    assert!(check(&d, &boxes, &camera, "stacked") > 50);
+    assert_eq!(stats.intersection_lines, 0, "{stats:?}");
+    let visible = |object| {
+        d.visible()
+            .filter(|p| d.edges[p.edge as usize].object == Some(object))
+            .count()
+    };
+    assert_eq!((visible(0), visible(1)), (7, 9));
+}
