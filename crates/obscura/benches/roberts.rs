@@ -92,6 +92,11 @@ fn roberts(c: &mut Criterion) {
         g.bench_function(name, |b| {
             b.iter(|| draw(black_box(&view), &RobertsOptions::default()).unwrap())
         });
+        let mut counting = RobertsOptions::default();
+        counting.quantitative = true;
+        g.bench_function(format!("{name}, quantitative"), |b| {
+            b.iter(|| draw(black_box(&view), &counting).unwrap())
+        });
     }
     g.finish();
 }

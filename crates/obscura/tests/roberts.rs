@@ -154,13 +154,18 @@ impl Boxed {
     /// The open interval of `u` in `(0, u_max]` where `o + u dir` is strictly inside
     /// (slabs in the box's frame), as a length in `u`.
     fn inside_length(&self, o: DVec3, dir: DVec3, u_max: f64) -> f64 {
+        self.inside(o, dir, u_max).map_or(0.0, |(lo, hi)| hi - lo)
+    }
+
+    /// The interval of `u` in `[0, u_max]` where `o + u dir` is inside, if any.
+    fn inside(&self, o: DVec3, dir: DVec3, u_max: f64) -> Option<(f64, f64)> {
         let inv = self.rotation.inverse();
         let (o, dir) = (inv * (o - self.centre), inv * dir);
         let (mut lo, mut hi) = (0.0f64, u_max);
         for k in 0..3 {
             if dir[k] == 0.0 {
                 if o[k].abs() >= self.half[k] {
-                    return 0.0;
+                    return None;
                 }
                 continue;
             }
@@ -169,7 +174,7 @@ impl Boxed {
             lo = lo.max(a.min(b));
             hi = hi.min(a.max(b));
         }
-        (hi - lo).max(0.0)
+        (hi > lo).then_some((lo, hi))
     }
 }
 
@@ -230,6 +235,71 @@ fn reference_hidden(boxes: &[Boxed], camera: &Camera, p: DVec3) -> Option<bool> 
     } else {
         None
     }
+}
+
+/// The number of faces in front of the world point `p`, by the reference: 2 for each
+/// box the segment to the viewer passes through, 1 for a box it starts in or on.
+/// `None` when it is too close to call.
+fn reference_count(boxes: &[Boxed], camera: &Camera, p: DVec3) -> Option<u32> {
+    let forward = (camera.target - camera.eye).normalize();
+    let depth = (p - camera.eye).dot(forward);
+    let (dir, u_max) = if matches!(camera.projection, obscura::Projection::Orthographic { .. }) {
+        (-forward, depth - camera.near)
+    } else {
+        (camera.eye - p, 1.0 - camera.near / depth)
+    };
+    let scale = dir.length();
+    let mut count = 0;
+    for b in boxes {
+        if let Some((lo, hi)) = b.inside(p, dir, u_max) {
+            let (lo, hi) = (lo * scale, hi * scale);
+            if hi - lo > 1e-3 {
+                if lo < 1e-9 {
+                    count += 1;
+                } else if lo > 1e-3 {
+                    count += 2;
+                } else {
+                    return None;
+                }
+            } else if hi - lo > 1e-9 {
+                return None;
+            }
+        }
+    }
+    Some(count)
+}
+
+/// Checks every piece of a quantitative drawing at interior points against the
+/// reference count; returns the number of points compared.
+fn check_counts(drawing: &Drawing, boxes: &[Boxed], camera: &Camera, label: &str) -> usize {
+    let mut compared = 0;
+    for piece in &drawing.pieces {
+        let edge = &drawing.edges[piece.edge as usize];
+        let [a, b] = piece.t;
+        if piece.length() < 2.0 {
+            continue;
+        }
+        for f in [0.1, 0.3, 0.5, 0.7, 0.9] {
+            let t = a + (b - a) * f;
+            let near: Vec<Option<u32>> = [-1e-4, 0.0, 1e-4]
+                .iter()
+                .map(|dt| reference_count(boxes, camera, edge.point(t + dt)))
+                .collect();
+            if near.iter().any(Option::is_none) || near[0] != near[1] || near[1] != near[2] {
+                continue;
+            }
+            assert_eq!(
+                near[1].unwrap(),
+                piece.invisibility,
+                "{label}: edge {} ({:?}) at t = {t} (piece {:?})",
+                piece.edge,
+                edge.kind,
+                piece.t
+            );
+            compared += 1;
+        }
+    }
+    compared
 }
 
 /// Checks every piece of a drawing at interior points against the reference; returns
@@ -319,6 +389,24 @@ fn random_boxes_match_the_sampling_reference() {
             "{label}"
         );
         total += n;
+        // Quantitative: the same visible pieces, hidden ones with their face counts.
+        let mut options = RobertsOptions::default();
+        options.quantitative = true;
+        let (counted, _) = draw(&v, &options).unwrap();
+        check_pieces_tile_edges(&counted);
+        let visible = |d: &Drawing| -> Vec<(u32, [i64; 2])> {
+            d.visible()
+                .filter(|p| p.t[1] - p.t[0] > 1e-9)
+                .map(|p| (p.edge, p.t.map(|t| (t * 1e8).round() as i64)))
+                .collect()
+        };
+        assert_eq!(visible(&counted), visible(&drawing), "{label}");
+        let n = check_counts(&counted, &boxes, &camera, &label);
+        assert!(n > 100, "{label}: only {n} counts compared");
+        assert!(
+            counted.pieces.iter().any(|p| p.invisibility >= 2),
+            "{label}"
+        );
     }
     assert!(total > 2000, "{total}");
 }

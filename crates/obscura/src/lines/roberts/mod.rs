@@ -33,9 +33,12 @@
 //! A [`Drawing`]: every edge between two planes that differ ([`EdgeKind::Crease`];
 //! edges between coplanar polygons, such as a square's diagonal, are not drawn) and
 //! every intersection line, cut into pieces with invisibility 0 (visible) or 1
-//! (hidden by one body or more: hidden pieces are not tested further, as in the seed,
-//! so the number of hiding bodies is not counted). Edges are clipped to the view
-//! volume; pieces are in pixel coordinates.
+//! (hidden by one body or more: hidden pieces are not tested further, as in the seed).
+//! With [`RobertsOptions::quantitative`], hidden pieces are tested against every body
+//! too and get the number of faces in front of them, as `hlr` counts them (2 per body
+//! wholly in front, 1 for a body the point is in or on, 1 for an edge's own body when
+//! it hides it). Edges are clipped to the view volume; pieces are in pixel
+//! coordinates.
 //!
 //! # Departures from the seed, and why
 //! - The seed tests a body only against bodies of lower priority. A body whose
@@ -67,7 +70,7 @@ pub use edge::{EdgeAgainstBody, edge_against_body};
 use glam::{DVec3, DVec4};
 
 use self::body::{Body, Space};
-use self::edge::{Row, edge_scale, hidden_interval, trivially_visible};
+use self::edge::{Row, edge_scale, hidden_interval, inside_interval, trivially_visible};
 use super::{Drawing, DrawnEdge, EdgeKind, Piece};
 use crate::{Result, View};
 
@@ -77,12 +80,19 @@ use crate::{Result, View};
 pub struct RobertsOptions {
     /// Find the intersection lines of bodies that pierce each other (stage 4).
     pub intersections: bool,
+    /// Quantitative invisibility: give every hidden piece the number of faces in front
+    /// of it (as `hlr` does: 2 for a body wholly in front, 1 for the body the point is
+    /// in or on, 1 for an edge's own body when it hides it), testing hidden pieces
+    /// against every body too. Off (the seed's way): hidden pieces are not tested
+    /// further and have invisibility 1.
+    pub quantitative: bool,
 }
 
 impl Default for RobertsOptions {
     fn default() -> Self {
         RobertsOptions {
             intersections: true,
+            quantitative: false,
         }
     }
 }
@@ -160,6 +170,8 @@ pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsSt
     let mut tester = Tester {
         space: &space,
         bodies: &bodies,
+        quantitative: options.quantitative,
+        events: Vec::new(),
         rows: Vec::new(),
         visible: Vec::new(),
         next: Vec::new(),
@@ -238,6 +250,9 @@ fn polygon_at(view: &View, body: &Body, plane: usize, p: DVec3) -> u32 {
 struct Tester<'a> {
     space: &'a Space,
     bodies: &'a [Body],
+    quantitative: bool,
+    /// Quantitative mode: `(t, change of the count of faces in front)`.
+    events: Vec<(f64, i32)>,
     rows: Vec<Row>,
     visible: Vec<(f64, f64)>,
     next: Vec<(f64, f64)>,
@@ -261,6 +276,28 @@ impl Tester<'_> {
         let Some((t0, t1)) = clip_to_view(s, d) else {
             return;
         };
+        if self.quantitative {
+            self.events.clear();
+            self.count(stats, s, d, t0, t1, own);
+            let mut events = std::mem::take(&mut self.events);
+            events.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (mut at, mut count) = (t0, i64::from(own_hidden));
+            let mut pending: Option<Piece> = None;
+            for &(t, delta) in &events {
+                let t = t.clamp(t0, t1);
+                if t > at {
+                    self.push_merged(drawing, &mut pending, (index, s, d), [at, t], count);
+                    at = t;
+                }
+                count += i64::from(delta);
+            }
+            if at < t1 {
+                self.push_merged(drawing, &mut pending, (index, s, d), [at, t1], count);
+            }
+            drawing.pieces.extend(pending);
+            self.events = events;
+            return;
+        }
         self.visible.clear();
         if !own_hidden {
             self.visible.push((t0, t1));
@@ -286,6 +323,84 @@ impl Tester<'_> {
         }
     }
 
+    /// Appends the piece `t` of count `count` to `pending`, the last piece of the
+    /// edge: extended when the count is the same or the piece too short to keep,
+    /// pushed to the drawing and replaced otherwise.
+    fn push_merged(
+        &self,
+        drawing: &mut Drawing,
+        pending: &mut Option<Piece>,
+        (index, s, d): (u32, DVec4, DVec4),
+        t: [f64; 2],
+        count: i64,
+    ) {
+        let invisibility = count.max(0) as u32;
+        if let Some(p) = pending {
+            if p.invisibility == invisibility || t[1] - t[0] <= 1e-12 {
+                p.t[1] = t[1];
+                p.points[1] = self.space.pixel(s + d * t[1]);
+                return;
+            }
+            drawing.pieces.push(*p);
+        }
+        *pending = Some(Piece {
+            edge: index,
+            t,
+            points: t.map(|t| self.space.pixel(s + d * t)),
+            invisibility,
+        });
+    }
+
+    /// Quantitative mode: the changes of the count of faces in front along the edge
+    /// part `t0..t1`, into `self.events`. A body hiding a point puts two faces in front
+    /// of it, one when the point is inside it or on it.
+    fn count(
+        &mut self,
+        stats: &mut RobertsStats,
+        s: DVec4,
+        d: DVec4,
+        t0: f64,
+        t1: f64,
+        own: Option<usize>,
+    ) {
+        let (a, b) = (s + d * t0, s + d * t1);
+        let (pa, pb) = (a.truncate() / a.w, b.truncate() / b.w);
+        let (lo, hi) = (pa.min(pb), pa.max(pb));
+        let scale = edge_scale(s, d);
+        for (i, body) in self.bodies.iter().enumerate() {
+            if Some(i) == own || !may_hide(body, lo, hi) {
+                continue;
+            }
+            stats.edge_body_tests += 1;
+            self.rows.clear();
+            self.rows.extend(body.hiding.iter().map(|v| Row {
+                p: s.dot(*v),
+                q: d.dot(*v),
+                w: TOWARDS_VIEWER.dot(*v),
+            }));
+            if trivially_visible(&self.rows, t0, t1) {
+                stats.trivially_visible += 1;
+                continue;
+            }
+            let penetration = body.lo.z <= hi.z;
+            let Some((h0, h1)) = hidden_interval(&self.rows, t0, t1, penetration, scale) else {
+                continue;
+            };
+            self.events.extend([(h0, 2), (h1, -2)]);
+            // Inside or on the body (a = 0, the planes let off by twice the tolerance
+            // of `inside_interval`, which takes a plane the edge lies in for outside).
+            for r in &mut self.rows {
+                r.p += 2e-9 * scale;
+            }
+            if let Some((i0, _, i1, _)) = inside_interval(&self.rows, scale) {
+                let (i0, i1) = (i0.max(h0), i1.min(h1));
+                if i1 > i0 {
+                    self.events.extend([(i0, -1), (i1, 1)]);
+                }
+            }
+        }
+    }
+
     /// Removes from `self.visible` what the bodies hide.
     fn hide(
         &mut self,
@@ -304,14 +419,7 @@ impl Tester<'_> {
             if Some(i) == own {
                 continue;
             }
-            // Box tests (x, y), then depth: the body must reach nearer than the edge's
-            // farthest point.
-            if body.lo.x > hi.x
-                || body.hi.x < lo.x
-                || body.lo.y > hi.y
-                || body.hi.y < lo.y
-                || body.hi.z <= lo.z
-            {
+            if !may_hide(body, lo, hi) {
                 continue;
             }
             let penetration = body.lo.z <= hi.z;
@@ -346,6 +454,17 @@ impl Tester<'_> {
             }
         }
     }
+}
+
+/// The box tests (`x`, `y`) and the depth test: the body must reach nearer than the
+/// farthest point of the edge whose box (after the divide) is `lo..hi`.
+#[inline]
+fn may_hide(body: &Body, lo: DVec3, hi: DVec3) -> bool {
+    !(body.lo.x > hi.x
+        || body.hi.x < lo.x
+        || body.lo.y > hi.y
+        || body.hi.y < lo.y
+        || body.hi.z <= lo.z)
 }
 
 /// The part of the edge `s + t d` (`0 <= t <= 1`) inside the view volume `-w <= x, y,
