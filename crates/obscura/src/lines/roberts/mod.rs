@@ -72,6 +72,7 @@ use glam::{DVec3, DVec4};
 use self::body::{Body, Space};
 use self::edge::{Row, edge_scale, hidden_interval, inside_interval, trivially_visible};
 use super::{Drawing, DrawnEdge, EdgeKind, Piece};
+use crate::work::Deadline;
 use crate::{Result, View};
 
 /// Options of [`draw`].
@@ -86,6 +87,11 @@ pub struct RobertsOptions {
     /// against every body too. Off (the seed's way): hidden pieces are not tested
     /// further and have invisibility 1.
     pub quantitative: bool,
+    /// Stop with [`crate::Error::TimeLimit`] after this long (checked at every edge
+    /// and every edge-body test).
+    pub time_limit: Option<std::time::Duration>,
+    /// Stop with [`crate::Error::Stopped`] once another thread raises this flag.
+    pub stop: Option<crate::work::StopFlag>,
 }
 
 impl Default for RobertsOptions {
@@ -93,6 +99,8 @@ impl Default for RobertsOptions {
         RobertsOptions {
             intersections: true,
             quantitative: false,
+            time_limit: None,
+            stop: None,
         }
     }
 }
@@ -127,6 +135,9 @@ pub struct RobertsStats {
     pub visible_pieces: u64,
 }
 
+/// The work named by a time-limit error.
+const WORK: &str = "Roberts' algorithm";
+
 /// The direction to the viewer in the transformed space.
 const TOWARDS_VIEWER: DVec4 = DVec4::Z;
 
@@ -147,6 +158,7 @@ const TOWARDS_VIEWER: DVec4 = DVec4::Z;
 /// assert_eq!(stats.self_hidden_edges, 3);
 /// ```
 pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsStats)> {
+    let deadline = Deadline::new(options.time_limit, options.stop.clone());
     let space = Space::of(view);
     let scene = view.scene();
     let mut stats = RobertsStats::default();
@@ -155,6 +167,7 @@ pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsSt
     let mut vertex_base = 0u32;
     for (k, o) in scene.objects().iter().enumerate() {
         if view.kept_objects()[k] {
+            deadline.check(WORK)?;
             let b = body::build(view, &space, k, vertex_base, &mut cache)?;
             stats.planes += b.columns.len() as u64;
             stats.self_hidden_planes += b.hidden.iter().filter(|&&h| h).count() as u64;
@@ -171,6 +184,7 @@ pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsSt
         space: &space,
         bodies: &bodies,
         quantitative: options.quantitative,
+        deadline: &deadline,
         events: Vec::new(),
         rows: Vec::new(),
         visible: Vec::new(),
@@ -189,7 +203,7 @@ pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsSt
             if own {
                 stats.self_hidden_edges += 1;
             }
-            tester.add(&mut drawing, &mut stats, edge, Some(i), own);
+            tester.add(&mut drawing, &mut stats, edge, Some(i), own)?;
         }
     }
     if options.intersections {
@@ -199,6 +213,7 @@ pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsSt
                 if !a.world.overlaps(&b.world) {
                     continue;
                 }
+                deadline.check(WORK)?;
                 stats.penetration_pairs += 1;
                 let (points, joins) = penetration::joins(&space, a, b);
                 stats.penetration_points += points as u64;
@@ -215,7 +230,7 @@ pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsSt
                         ],
                         world: jn.world,
                     };
-                    tester.add(&mut drawing, &mut stats, edge, None, false);
+                    tester.add(&mut drawing, &mut stats, edge, None, false)?;
                 }
             }
         }
@@ -251,6 +266,7 @@ struct Tester<'a> {
     space: &'a Space,
     bodies: &'a [Body],
     quantitative: bool,
+    deadline: &'a Deadline,
     /// Quantitative mode: `(t, change of the count of faces in front)`.
     events: Vec<(f64, i32)>,
     rows: Vec<Row>,
@@ -268,17 +284,18 @@ impl Tester<'_> {
         edge: DrawnEdge,
         own: Option<usize>,
         own_hidden: bool,
-    ) {
+    ) -> Result<()> {
+        self.deadline.check(WORK)?;
         let index = drawing.edges.len() as u32;
         drawing.edges.push(edge);
         let s = self.space.point(edge.world[0]);
         let d = self.space.point(edge.world[1]) - s;
         let Some((t0, t1)) = clip_to_view(s, d) else {
-            return;
+            return Ok(());
         };
         if self.quantitative {
             self.events.clear();
-            self.count(stats, s, d, t0, t1, own);
+            self.count(stats, s, d, t0, t1, own)?;
             let mut events = std::mem::take(&mut self.events);
             events.sort_by(|a, b| a.0.total_cmp(&b.0));
             let (mut at, mut count) = (t0, i64::from(own_hidden));
@@ -296,12 +313,12 @@ impl Tester<'_> {
             }
             drawing.pieces.extend(pending);
             self.events = events;
-            return;
+            return Ok(());
         }
         self.visible.clear();
         if !own_hidden {
             self.visible.push((t0, t1));
-            self.hide(stats, s, d, t0, t1, own);
+            self.hide(stats, s, d, t0, t1, own)?;
         }
         // Pieces: the visible intervals and the gaps between them.
         let mut at = t0;
@@ -321,6 +338,7 @@ impl Tester<'_> {
         if at < t1 {
             drawing.pieces.push(piece(at, t1, 1));
         }
+        Ok(())
     }
 
     /// Appends the piece `t` of count `count` to `pending`, the last piece of the
@@ -362,7 +380,7 @@ impl Tester<'_> {
         t0: f64,
         t1: f64,
         own: Option<usize>,
-    ) {
+    ) -> Result<()> {
         let (a, b) = (s + d * t0, s + d * t1);
         let (pa, pb) = (a.truncate() / a.w, b.truncate() / b.w);
         let (lo, hi) = (pa.min(pb), pa.max(pb));
@@ -372,6 +390,7 @@ impl Tester<'_> {
                 continue;
             }
             stats.edge_body_tests += 1;
+            self.deadline.check(WORK)?;
             self.rows.clear();
             self.rows.extend(body.hiding.iter().map(|v| Row {
                 p: s.dot(*v),
@@ -399,6 +418,7 @@ impl Tester<'_> {
                 }
             }
         }
+        Ok(())
     }
 
     /// Removes from `self.visible` what the bodies hide.
@@ -410,7 +430,7 @@ impl Tester<'_> {
         t0: f64,
         t1: f64,
         own: Option<usize>,
-    ) {
+    ) -> Result<()> {
         let (a, b) = (s + d * t0, s + d * t1);
         let (pa, pb) = (a.truncate() / a.w, b.truncate() / b.w);
         let (lo, hi) = (pa.min(pb), pa.max(pb));
@@ -424,6 +444,7 @@ impl Tester<'_> {
             }
             let penetration = body.lo.z <= hi.z;
             stats.edge_body_tests += 1;
+            self.deadline.check(WORK)?;
             self.rows.clear();
             self.rows.extend(body.hiding.iter().map(|v| Row {
                 p: s.dot(*v),
@@ -450,9 +471,10 @@ impl Tester<'_> {
             }
             std::mem::swap(&mut self.visible, &mut self.next);
             if self.visible.is_empty() {
-                return;
+                return Ok(());
             }
         }
+        Ok(())
     }
 }
 
