@@ -176,11 +176,75 @@ pub(super) fn hidden_interval(
             }
         }
     }
-    let (lo, hi) = (lo.max(t0), hi.min(t1));
+    interior(rows, lo.max(t0), hi.min(t1), tol)
+}
+
+/// Bodies with more planes than this are cut by [`hidden_interval_clipped`]: the
+/// pairwise solutions cost `O(j^3)` (a sphere of 1,000 faces would take seconds per
+/// edge), the clipping `O(j k)` for a polygon of `k` corners.
+pub(super) const PAIRWISE_MAX_PLANES: usize = 16;
+
+/// The same interval as [`hidden_interval`] for bodies of many planes: the polygon of
+/// `(t, a)` is built by clipping the rectangle `t0 <= t <= t1`, `0 <= a <= A` by one
+/// inequality after the other (its corners are the pairwise solutions that satisfy
+/// every inequality, the seed's corners), `A` the least height a plane turned towards
+/// the viewer allows.
+pub(super) fn hidden_interval_clipped(
+    rows: &[Row],
+    t0: f64,
+    t1: f64,
+    penetration: bool,
+    scale: f64,
+) -> Option<(f64, f64)> {
+    let top = rows
+        .iter()
+        .filter(|r| r.w < 0.0)
+        .map(|r| (-(r.p + r.q * t0) / r.w).max(-(r.p + r.q * t1) / r.w))
+        .fold(f64::INFINITY, f64::min);
+    if !top.is_finite() {
+        // Unbounded towards the viewer (no plane turned towards it): the seed's way.
+        return hidden_interval(rows, t0, t1, penetration, scale);
+    }
+    if !(top > 0.0) {
+        return None;
+    }
+    let mut poly: Vec<(f64, f64)> = vec![(t0, 0.0), (t1, 0.0), (t1, top), (t0, top)];
+    let mut next: Vec<(f64, f64)> = Vec::with_capacity(8);
+    for r in rows {
+        next.clear();
+        for i in 0..poly.len() {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            let (ha, hb) = (r.at(a.0, a.1), r.at(b.0, b.1));
+            if ha >= 0.0 {
+                next.push(a);
+            }
+            if (ha >= 0.0) != (hb >= 0.0) {
+                let f = ha / (ha - hb);
+                next.push((a.0 + (b.0 - a.0) * f, a.1 + (b.1 - a.1) * f));
+            }
+        }
+        std::mem::swap(&mut poly, &mut next);
+        if poly.is_empty() {
+            return None;
+        }
+    }
+    let lo = poly.iter().map(|v| v.0).fold(f64::INFINITY, f64::min);
+    let hi = poly.iter().map(|v| v.0).fold(f64::NEG_INFINITY, f64::max);
+    interior(
+        rows,
+        lo.max(t0),
+        hi.min(t1),
+        EPS * scale.max(f64::MIN_POSITIVE),
+    )
+}
+
+/// `Some((lo, hi))` when the polygon of `(t, a)` spanning `lo..hi` has an interior:
+/// at the middle `t` the range of `a` must have width (a concave width, positive
+/// inside the span if anywhere).
+fn interior(rows: &[Row], lo: f64, hi: f64, tol: f64) -> Option<(f64, f64)> {
     if !(hi - lo > EPS_T) {
         return None;
     }
-    // Interior: at the middle t the range of a must have width.
     let tm = 0.5 * (lo + hi);
     let (mut a_lo, mut a_hi) = (0.0f64, f64::INFINITY);
     for r in rows {
@@ -195,11 +259,7 @@ pub(super) fn hidden_interval(
             a_hi = a_hi.min(-c / r.w);
         }
     }
-    if a_hi - a_lo > tol {
-        Some((lo, hi))
-    } else {
-        None
-    }
+    (a_hi - a_lo > tol).then_some((lo, hi))
 }
 
 /// Where the edge part `t0..t1` is inside the body (`a = 0`): `(t_in, plane entered
@@ -230,4 +290,69 @@ pub(super) fn inside_interval(
         }
     }
     (t_out - t_in > EPS_T).then_some((t_in, j_in, t_out, j_out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The clipping and the seed's pairwise solutions find the same interval, on
+    /// random bodies (planes tangent to a sphere) and random edges.
+    #[test]
+    fn clipping_agrees_with_the_pairwise_solutions() {
+        let mut rng = SplitMix64(4);
+        let mut hidden = 0;
+        for _ in 0..2000 {
+            let n = 4 + (rng.next_u64() % 12) as usize;
+            let columns: Vec<DVec4> = (0..n)
+                .map(|_| {
+                    let v = glam::DVec3::new(
+                        rng.range(-1.0, 1.0),
+                        rng.range(-1.0, 1.0),
+                        rng.range(-1.0, 1.0),
+                    )
+                    .normalize();
+                    // Inside: -v . x + 1 >= 0 (the unit ball's tangent planes).
+                    (-v).extend(1.0)
+                })
+                .collect();
+            let s = DVec4::new(
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+                rng.range(-3.0, 0.5),
+                1.0,
+            );
+            let e = DVec4::new(
+                rng.range(-2.0, 2.0),
+                rng.range(-2.0, 2.0),
+                rng.range(-3.0, 0.5),
+                1.0,
+            );
+            let d = e - s;
+            let rows: Vec<Row> = columns
+                .iter()
+                .map(|v| Row {
+                    p: s.dot(*v),
+                    q: d.dot(*v),
+                    w: DVec4::Z.dot(*v),
+                })
+                .collect();
+            let scale = edge_scale(s, d);
+            let a = hidden_interval(&rows, 0.0, 1.0, true, scale);
+            let b = hidden_interval_clipped(&rows, 0.0, 1.0, true, scale);
+            match (a, b) {
+                (None, None) => {}
+                (Some(a), Some(b)) => {
+                    assert!(
+                        (a.0 - b.0).abs() < 1e-9 && (a.1 - b.1).abs() < 1e-9,
+                        "{a:?} {b:?}"
+                    );
+                    hidden += 1;
+                }
+                _ => panic!("{a:?} {b:?} for {rows:?}"),
+            }
+        }
+        assert!(hidden > 200, "{hidden}");
+    }
 }

@@ -70,7 +70,10 @@ pub use edge::{EdgeAgainstBody, edge_against_body};
 use glam::{DVec3, DVec4};
 
 use self::body::{Body, Space};
-use self::edge::{Row, edge_scale, hidden_interval, inside_interval, trivially_visible};
+use self::edge::{
+    PAIRWISE_MAX_PLANES, Row, edge_scale, hidden_interval, hidden_interval_clipped,
+    inside_interval, trivially_visible,
+};
 use super::{Drawing, DrawnEdge, EdgeKind, Piece};
 use crate::work::Deadline;
 use crate::{Result, View};
@@ -402,7 +405,7 @@ impl Tester<'_> {
                 continue;
             }
             let penetration = body.lo.z <= hi.z;
-            let Some((h0, h1)) = hidden_interval(&self.rows, t0, t1, penetration, scale) else {
+            let Some((h0, h1)) = solve(&self.rows, t0, t1, penetration, scale) else {
                 continue;
             };
             self.events.extend([(h0, 2), (h1, -2)]);
@@ -457,7 +460,7 @@ impl Tester<'_> {
             }
             self.next.clear();
             for &(ta, tb) in &self.visible {
-                match hidden_interval(&self.rows, ta, tb, penetration, scale) {
+                match solve(&self.rows, ta, tb, penetration, scale) {
                     None => self.next.push((ta, tb)),
                     Some((ha, hb)) => {
                         if ha > ta {
@@ -475,6 +478,17 @@ impl Tester<'_> {
             }
         }
         Ok(())
+    }
+}
+
+/// The hidden interval by the seed's pairwise solutions, or by clipping for bodies of
+/// many planes (the same corners, found in `O(j k)` rather than `O(j^3)`).
+#[inline]
+fn solve(rows: &[Row], t0: f64, t1: f64, penetration: bool, scale: f64) -> Option<(f64, f64)> {
+    if rows.len() <= PAIRWISE_MAX_PLANES {
+        hidden_interval(rows, t0, t1, penetration, scale)
+    } else {
+        hidden_interval_clipped(rows, t0, t1, penetration, scale)
     }
 }
 
