@@ -305,6 +305,11 @@ fn check_counts(drawing: &Drawing, boxes: &[Boxed], camera: &Camera, label: &str
 /// Checks every piece of a drawing at interior points against the reference; returns
 /// the number of points compared.
 fn check(drawing: &Drawing, boxes: &[Boxed], camera: &Camera, label: &str) -> usize {
+    check_with(drawing, &|p| reference_hidden(boxes, camera, p), label)
+}
+
+/// [`check`] with any reference.
+fn check_with(drawing: &Drawing, reference: &dyn Fn(DVec3) -> Option<bool>, label: &str) -> usize {
     let mut compared = 0;
     for piece in &drawing.pieces {
         let edge = &drawing.edges[piece.edge as usize];
@@ -318,7 +323,7 @@ fn check(drawing: &Drawing, boxes: &[Boxed], camera: &Camera, label: &str) -> us
             // Near a change of visibility the reference cannot call it either way.
             let near: Vec<Option<bool>> = [-1e-4, 0.0, 1e-4]
                 .iter()
-                .map(|dt| reference_hidden(boxes, camera, edge.point(t + dt)))
+                .map(|dt| reference(edge.point(t + dt)))
                 .collect();
             if near.iter().any(Option::is_none) || near[0] != near[1] || near[1] != near[2] {
                 continue;
@@ -720,4 +725,94 @@ fn boxes_touching_along_a_face_hide_nothing_there() {
             .count()
     };
     assert_eq!((visible(0), visible(1)), (7, 9));
+}
+
+/// The interval of `u` in `[0, u_max]` where `o + u dir` is inside the convex body of
+/// world planes `(n, d)` (inside `n . x + d < 0`, outward normals), if any.
+fn convex_inside(planes: &[(DVec3, f64)], o: DVec3, dir: DVec3, u_max: f64) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (0.0f64, u_max);
+    for &(n, d) in planes {
+        let (a, b) = (n.dot(o) + d, n.dot(dir));
+        if b == 0.0 {
+            if a >= 0.0 {
+                return None;
+            }
+        } else if b > 0.0 {
+            hi = hi.min(-a / b);
+        } else {
+            lo = lo.max(-a / b);
+        }
+    }
+    (hi > lo).then_some((lo, hi))
+}
+
+#[test]
+fn spheres_of_many_planes_match_the_reference() {
+    // Two overlapping polyhedral spheres (264 faces each: the bodies of many planes
+    // are cut by clipping) and a box; perspective.
+    let mut scene = Scene::new();
+    let placements = [
+        DMat4::from_translation(DVec3::new(-0.6, 0.0, 0.0)),
+        DMat4::from_translation(DVec3::new(0.6, 0.3, 0.2)) * DMat4::from_scale(DVec3::splat(0.8)),
+    ];
+    for (i, m) in placements.iter().enumerate() {
+        scene
+            .add(
+                ObjectDesc::new(format!("sphere{i}"), demo::uv_sphere_mesh(1.0, 24, 12))
+                    .with_transform(*m),
+            )
+            .unwrap();
+    }
+    scene
+        .add(ObjectDesc::new(
+            "box",
+            demo::box_mesh(DVec3::new(-2.5, -0.4, -2.0), DVec3::new(-1.0, 0.4, -1.2)),
+        ))
+        .unwrap();
+    // Outward world planes of every object, from its polygons.
+    let bodies: Vec<Vec<(DVec3, f64)>> = scene
+        .objects()
+        .iter()
+        .map(|o| {
+            (0..o.mesh.polygon_count())
+                .map(|i| {
+                    let pts = o.world_polygon(i);
+                    let n = obscura::geom::newell_normal(&pts).normalize();
+                    (n, -n.dot(pts[0]))
+                })
+                .collect()
+        })
+        .collect();
+    let camera = Camera::perspective(
+        DVec3::new(2.0, 3.0, 6.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        50.0,
+        0.5,
+        30.0,
+    );
+    let reference = |p: DVec3| -> Option<bool> {
+        let forward = (camera.target - camera.eye).normalize();
+        let depth = (p - camera.eye).dot(forward);
+        let dir = camera.eye - p;
+        let u_max = 1.0 - camera.near / depth;
+        let deepest = bodies
+            .iter()
+            .map(|b| convex_inside(b, p, dir, u_max).map_or(0.0, |(lo, hi)| hi - lo) * dir.length())
+            .fold(0.0, f64::max);
+        if deepest > 1e-3 {
+            Some(true)
+        } else if deepest < 1e-9 {
+            Some(false)
+        } else {
+            None
+        }
+    };
+    let v = view(&scene, &camera, 400, 300);
+    let (d, stats) = draw(&v, &RobertsOptions::default()).unwrap();
+    assert!(stats.planes > 500, "{stats:?}");
+    assert!(stats.intersection_lines > 20, "{stats:?}");
+    check_pieces_tile_edges(&d);
+    let n = check_with(&d, &reference, "spheres");
+    assert!(n > 300, "{n}");
 }
