@@ -51,9 +51,16 @@
 //! - A body that crosses the near plane hides only beyond it (the near plane is added
 //!   as one more column), as the surface algorithms clip it.
 //!
+//! - Bodies of more than 16 planes find the same corners by clipping the rectangle of
+//!   `(t, a)` plane by plane (`O(j k)` for `k` corners) rather than by the pairwise
+//!   solutions (`O(j^3)`): a polyhedral sphere of 264 faces would cost milliseconds
+//!   per edge the seed's way.
+//!
 //! # Complexity
-//! `O(E B j^3)` for `E` edges, `B` bodies that pass the box tests and `j` planes per
-//! body (the seed's pairwise solutions). 100 boxes at 1920x1080: see
+//! `O(E B j^3)` for `E` edges, `B` bodies that pass the box tests and `j <= 16` planes
+//! per body (the seed's pairwise solutions), `O(E B j k)` beyond; the intersection
+//! lines `O(P e j)` for `P` pairs of overlapping bodies with `e` edges. A time limit
+//! and a stop flag ([`RobertsOptions`]) end long runs. 100 boxes at 1920x1080: see
 //! `benches/roberts.rs` and `docs/lines.md`.
 //!
 //! # Limitations
