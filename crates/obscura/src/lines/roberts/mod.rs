@@ -4,7 +4,7 @@
 //! corrected in `ALGORITHMS.md`).
 //!
 //! # Steps
-//! 1. **Bodies** ([`body`]): every object the view keeps must be a convex closed
+//! 1. **Bodies** (`body.rs`): every object the view keeps must be a convex closed
 //!    polyhedron (else an error names it). Its *body matrix* has one column
 //!    `[a b c d]` per plane ([`body_matrix`]), signed so that the interior point (the
 //!    average of its vertices) gives a positive product. The columns are taken to the
@@ -47,7 +47,7 @@
 //!   farther at the other), so every body that passes the box and depth tests is
 //!   tested, in priority order.
 //! - Joins of penetration points: only those on a face of each body (see
-//!   [`penetration`]), which are the pieces of the intersection line.
+//!   `penetration.rs`), which are the pieces of the intersection line.
 //! - A body that crosses the near plane hides only beyond it (the near plane is added
 //!   as one more column), as the surface algorithms clip it.
 //!
