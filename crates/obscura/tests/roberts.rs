@@ -386,6 +386,19 @@ fn random_boxes_match_the_sampling_reference() {
         let v = view(&scene, &camera, 320, 240);
         let (drawing, stats) = draw(&v, &RobertsOptions::default()).unwrap();
         check_pieces_tile_edges(&drawing);
+        // Body edges in object order, then the intersection lines.
+        let objects: Vec<u32> = drawing
+            .edges
+            .iter()
+            .map(|e| {
+                if e.kind == EdgeKind::Crease {
+                    e.object.unwrap()
+                } else {
+                    u32::MAX
+                }
+            })
+            .collect();
+        assert!(objects.windows(2).all(|w| w[0] <= w[1]));
         let label = format!("round {round} ({stats:?})");
         let n = check(&drawing, &boxes, &camera, &label);
         assert!(n > 100, "{label}: only {n} points compared");

@@ -187,12 +187,15 @@ pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsSt
     }
     stats.bodies = bodies.len() as u64;
     // The seed's priority list: farthest (smallest largest z) first.
-    bodies.sort_by(|a, b| a.hi.z.total_cmp(&b.hi.z).then(a.object.cmp(&b.object)));
+    // (Edges are drawn in object order; the bodies hide in priority order.)
+    let mut priority: Vec<usize> = (0..bodies.len()).collect();
+    priority.sort_by(|&a, &b| bodies[a].hi.z.total_cmp(&bodies[b].hi.z).then(a.cmp(&b)));
 
     let mut drawing = Drawing::new(space.width as u32, space.height as u32);
     let mut tester = Tester {
         space: &space,
         bodies: &bodies,
+        priority: &priority,
         quantitative: options.quantitative,
         deadline: &deadline,
         events: Vec::new(),
@@ -275,6 +278,8 @@ fn polygon_at(view: &View, body: &Body, plane: usize, p: DVec3) -> u32 {
 struct Tester<'a> {
     space: &'a Space,
     bodies: &'a [Body],
+    /// Body indices in the seed's priority order.
+    priority: &'a [usize],
     quantitative: bool,
     deadline: &'a Deadline,
     /// Quantitative mode: `(t, change of the count of faces in front)`.
@@ -395,7 +400,8 @@ impl Tester<'_> {
         let (pa, pb) = (a.truncate() / a.w, b.truncate() / b.w);
         let (lo, hi) = (pa.min(pb), pa.max(pb));
         let scale = edge_scale(s, d);
-        for (i, body) in self.bodies.iter().enumerate() {
+        for &i in self.priority {
+            let body = &self.bodies[i];
             if Some(i) == own || !may_hide(body, lo, hi) {
                 continue;
             }
@@ -445,7 +451,8 @@ impl Tester<'_> {
         let (pa, pb) = (a.truncate() / a.w, b.truncate() / b.w);
         let (lo, hi) = (pa.min(pb), pa.max(pb));
         let scale = edge_scale(s, d);
-        for (i, body) in self.bodies.iter().enumerate() {
+        for &i in self.priority {
+            let body = &self.bodies[i];
             if Some(i) == own {
                 continue;
             }
