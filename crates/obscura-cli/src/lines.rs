@@ -7,13 +7,13 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
+use obscura::budget::MemoryBudget;
 use obscura::lines::horizon::{HeightField, HorizonOptions};
 use obscura::lines::json::LinesFile;
 use obscura::lines::plot::{PlotOptions, PlotStats, plot};
 use obscura::lines::preview::PreviewOptions;
 use obscura::lines::svg::{Fit, HiddenStyle, Orientation, Page, PageLayout, Placement, SvgOptions};
 use obscura::lines::{Drawing, EdgeKinds, Progress, edges::EdgeOptions, hlr, horizon, roberts};
-use obscura::budget::MemoryBudget;
 use obscura::{Camera, Error, Result, SceneIndex, View, Viewport};
 use serde_json::json;
 
