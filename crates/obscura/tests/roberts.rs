@@ -846,3 +846,26 @@ fn spheres_of_many_planes_match_the_reference() {
     let n = check_with(&d, &reference, "spheres");
     assert!(n > 300, "{n}");
 }
+
+/// `demo:blocks` (the city's buildings without its ground) is the demo Roberts takes:
+/// every edge drawn, and the drawing agrees with the library's sampling check (ray
+/// casting through the scene's BVH) and with the exact HLR's visible length.
+#[test]
+fn demo_blocks_agree_with_ray_casting_and_hlr() {
+    use obscura::SceneIndex;
+    use obscura::lines::check::{CheckOptions, check};
+    use obscura::lines::hlr::{self, HlrOptions};
+    let scene = Scene::demo("blocks").unwrap();
+    let vp = Viewport::new(640, 360).unwrap();
+    let camera = scene.default_camera(vp.aspect());
+    let v = View::new(&scene, &camera, vp, &PrepareOptions::default()).unwrap();
+    let index = SceneIndex::new(&scene);
+    let (d, _) = draw(&v, &RobertsOptions::default()).unwrap();
+    assert!(d.visible().count() > 100 && d.hidden().count() > 100);
+    let report = check(&index, &v, &d, &CheckOptions::default());
+    assert!(report.samples > 0 && report.agrees(), "{report:?}");
+    let (h, _) = hlr::draw(&index, &v, &HlrOptions::default()).unwrap();
+    let length = |d: &Drawing| d.visible().map(|p| p.length()).sum::<f64>();
+    let (a, b) = (length(&d), length(&h));
+    assert!((a - b).abs() <= 1e-6 * b, "visible length: roberts {a}, hlr {b}");
+}

@@ -23,12 +23,13 @@ use crate::{Error, Result};
 use crate::rng::SplitMix64;
 
 /// The names [`Scene::demo`] (and the CLI's `demo:NAME`) accepts.
-pub const NAMES: [&str; 6] = [
+pub const NAMES: [&str; 7] = [
     "default",
     "seed-task",
     "cube",
     "sphere",
     "city",
+    "blocks",
     "triangles",
 ];
 
@@ -40,6 +41,7 @@ pub fn scene(name: &str) -> Result<Scene> {
         "cube" => Ok(cube()),
         "sphere" => Ok(sphere(1000, 500)),
         "city" => Ok(city(100, 100, 7)),
+        "blocks" => Ok(blocks(10, 10, 7)),
         "triangles" => Ok(overlapping_triangles(10_000, 11)),
         _ => Err(Error::UnknownDemo {
             name: name.to_string(),
@@ -272,14 +274,28 @@ pub fn sphere(segments: u32, rings: u32) -> Scene {
 /// ground and one per box.
 #[must_use]
 pub fn city(nx: u32, nz: u32, seed: u64) -> Scene {
+    city_blocks(nx, nz, seed, true)
+}
+
+/// The buildings of [`city`] without the ground: convex closed boxes only, the input
+/// Roberts' hidden-line algorithm takes (`demo:blocks`, 10 x 10).
+#[must_use]
+pub fn blocks(nx: u32, nz: u32, seed: u64) -> Scene {
+    city_blocks(nx, nz, seed, false)
+}
+
+fn city_blocks(nx: u32, nz: u32, seed: u64, ground: bool) -> Scene {
     let mut s = Scene::new();
     let mut rng = SplitMix64(seed);
     let block = 1.0;
     let (w, d) = (f64::from(nx) * block, f64::from(nz) * block);
-    s.add(
-        ObjectDesc::new("ground", grid_mesh(w * 1.2, d * 1.2, 1, 1)).with_color([0.55, 0.55, 0.5]),
-    )
-    .expect("valid");
+    if ground {
+        s.add(
+            ObjectDesc::new("ground", grid_mesh(w * 1.2, d * 1.2, 1, 1))
+                .with_color([0.55, 0.55, 0.5]),
+        )
+        .expect("valid");
+    }
     let unit = std::sync::Arc::new(box_mesh(
         DVec3::new(-0.5, 0.0, -0.5),
         DVec3::new(0.5, 1.0, 0.5),
