@@ -36,3 +36,28 @@ use std::sync::Arc;
 /// A progress callback for long work: `(done, total)` in units of the work's choosing
 /// (edges for hidden-line removal). Called from any thread, often; keep it cheap.
 pub type Progress = Arc<dyn Fn(u64, u64) + Send + Sync>;
+
+/// The exact drawing of what `view` sees of `index`'s scene with the default options:
+/// feature edges (silhouettes, creases, boundaries, borders, intersection lines) cut
+/// into pieces of one quantitative invisibility by [`hlr::draw`]. For other options,
+/// Roberts' algorithm or the floating horizon, call [`hlr::draw`], [`roberts::draw`] or
+/// [`horizon::draw`].
+///
+/// ```
+/// use obscura::{Scene, SceneIndex, View, Viewport, PrepareOptions, lines};
+/// let scene = Scene::demo("cube").unwrap();
+/// let index = SceneIndex::new(&scene);
+/// let vp = Viewport::new(320, 240).unwrap();
+/// let view = View::new(&scene, &scene.default_camera(vp.aspect()), vp,
+///                      &PrepareOptions::default()).unwrap();
+/// let drawing = lines::draw(&index, &view).unwrap();
+/// // A cube seen from a corner: 9 edges in sight (6 silhouettes, 3 creases), 3 hidden.
+/// assert_eq!(drawing.visible().count(), 9);
+/// assert_eq!(drawing.hidden().count(), 3);
+/// let (plot, _) = lines::plot::plot(&drawing, &Default::default()).unwrap();
+/// let svg = lines::svg::to_string(&plot, &Default::default()).unwrap();
+/// assert!(svg.contains("inkscape:label=\"1-visible\""));
+/// ```
+pub fn draw(index: &crate::SceneIndex, view: &crate::View) -> crate::Result<Drawing> {
+    hlr::draw(index, view, &hlr::HlrOptions::default()).map(|(d, _)| d)
+}
