@@ -422,8 +422,10 @@ pub fn run(args: &LinesArgs) -> Result<()> {
         let viewport = Viewport::new(w, h)?;
         let camera = field_camera(args, &field, viewport)?;
         let start = Instant::now();
-        let (drawing, stats) =
-            horizon::draw(&field, &camera, viewport, &HorizonOptions::default())?;
+        let mut options = HorizonOptions::default();
+        options.memory_limit = args.view.memory_limit;
+        options.hidden = args.hidden != HiddenStyle::None;
+        let (drawing, stats) = horizon::draw(&field, &camera, viewport, &options)?;
         let drawn = Drawn {
             drawing,
             algorithm: args.algo.name().to_string(),
@@ -462,7 +464,9 @@ pub fn run(args: &LinesArgs) -> Result<()> {
                     (d, serde_json::to_value(&s).unwrap_or_default())
                 }
                 _ => {
-                    let (d, s) = roberts::draw(&view, &roberts::RobertsOptions::default())?;
+                    let mut options = roberts::RobertsOptions::default();
+                    options.time_limit = args.view.remaining_time();
+                    let (d, s) = roberts::draw(&view, &options)?;
                     (d, serde_json::to_value(&s).unwrap_or_default())
                 }
             };

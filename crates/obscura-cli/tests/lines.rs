@@ -330,3 +330,89 @@ fn an_output_that_is_the_input_scene_is_refused() {
     assert!(text(&o).contains("--algo horizon"), "{}", text(&o));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Each algorithm end to end on its demo, checked by ray casting (`--check` fails the
+/// run on any disagreement), and the refusals a user meets: Roberts on a non-convex
+/// object (named), a height field over the memory budget, a non-finite height.
+#[test]
+fn algorithms_run_checked_and_refuse_what_they_cannot_draw() {
+    let dir = tempdir("algos");
+    for (algo, scene) in [("hlr", "demo:default"), ("roberts", "demo:blocks")] {
+        let o = obscura(
+            &[
+                "lines", scene, "--algo", algo, "--size", "320x180", "--check", "-o", "d.svg",
+            ],
+            &dir,
+        );
+        assert!(o.status.success(), "{algo}: {}", text(&o));
+        assert!(
+            text(&o).contains("0 pieces disagree"),
+            "{algo}: {}",
+            text(&o)
+        );
+        assert!(
+            std::fs::read_to_string(dir.join("d.svg"))
+                .unwrap()
+                .contains("<polyline")
+        );
+    }
+    let o = obscura(
+        &["lines", "demo:default", "--algo", "roberts", "-o", "r.svg"],
+        &dir,
+    );
+    assert!(
+        !o.status.success() && text(&o).contains("convex"),
+        "{}",
+        text(&o)
+    );
+    assert!(!dir.join("r.svg").exists());
+    let o = obscura(
+        &[
+            "lines",
+            "--algo",
+            "horizon",
+            "--function",
+            "ripple",
+            "--grid",
+            "2000",
+            "--memory-limit",
+            "64M",
+            "-o",
+            "h.svg",
+        ],
+        &dir,
+    );
+    assert!(
+        !o.status.success() && text(&o).contains("memory budget"),
+        "{}",
+        text(&o)
+    );
+    std::fs::write(dir.join("nan.csv"), "1,2\n3,nan\n").unwrap();
+    let o = obscura(
+        &[
+            "lines", "--algo", "horizon", "--field", "nan.csv", "-o", "n.svg",
+        ],
+        &dir,
+    );
+    assert!(
+        !o.status.success() && text(&o).contains("nan.csv:2"),
+        "{}",
+        text(&o)
+    );
+    let o = obscura(
+        &[
+            "lines",
+            "--algo",
+            "horizon",
+            "--function",
+            "peaks",
+            "--grid",
+            "40",
+            "-o",
+            "p.svg",
+        ],
+        &dir,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    std::fs::remove_dir_all(&dir).ok();
+}

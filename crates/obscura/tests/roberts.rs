@@ -867,5 +867,8 @@ fn demo_blocks_agree_with_ray_casting_and_hlr() {
     let (h, _) = hlr::draw(&index, &v, &HlrOptions::default()).unwrap();
     let length = |d: &Drawing| d.visible().map(|p| p.length()).sum::<f64>();
     let (a, b) = (length(&d), length(&h));
-    assert!((a - b).abs() <= 1e-6 * b, "visible length: roberts {a}, hlr {b}");
+    assert!(
+        (a - b).abs() <= 1e-6 * b,
+        "visible length: roberts {a}, hlr {b}"
+    );
 }

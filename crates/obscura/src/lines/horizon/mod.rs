@@ -272,6 +272,13 @@ pub fn draw(
     } else {
         0
     };
+    // The drawing is held whole, edges and pieces together (each checked alone below
+    // would let their sum pass the budget): one edge and at least one piece a segment.
+    budget.check_items(
+        "horizon drawing (edges and pieces)",
+        (drawn_z + drawn_x) as u64,
+        (size_of::<crate::lines::DrawnEdge>() + size_of::<Piece>()) as u64,
+    )?;
     let mut drawing = Drawing::new(viewport.width, viewport.height);
     drawing.edges = crate::budget::try_vec(&budget, EDGES, drawn_z + drawn_x)?;
     drawing.pieces = crate::budget::try_vec(&budget, PIECES, drawn_z + drawn_x)?;

@@ -15,6 +15,11 @@ use crate::{Error, Result, View};
 /// Two polygons lie on one plane when their unit normals differ by less than this
 /// (`1 - cos`) and their offsets by less than this times the body's size.
 const COPLANAR: f64 = 1e-9;
+/// Cell sizes of the plane search in `body_matrix`: more than twice what a matching
+/// normal (a dot product above `1 - COPLANAR`: components within 4.5e-5) and offset
+/// (within `COPLANAR` of the body's size) may differ by.
+const NORMAL_CELL: f64 = 1e-4;
+const OFFSET_CELL: f64 = 1e-8;
 /// A plane column faces away from the viewer when `E · V_j` is below minus this (the
 /// columns are scaled to a largest component of 1); faces seen edge on are not hidden.
 const EDGE_ON: f64 = 1e-12;
@@ -47,6 +52,7 @@ pub fn body_matrix(polygons: &[Vec<DVec3>]) -> (Vec<DVec4>, Vec<Option<usize>>) 
     );
     let size = (hi - lo).max_element().max(f64::MIN_POSITIVE);
     let mut columns: Vec<DVec4> = Vec::new();
+    let mut cells: HashMap<[i64; 4], Vec<usize>> = HashMap::new();
     let mut of_polygon = Vec::with_capacity(polygons.len());
     for poly in polygons {
         let n = newell_normal(poly);
@@ -58,11 +64,36 @@ pub fn body_matrix(polygons: &[Vec<DVec3>]) -> (Vec<DVec4>, Vec<Option<usize>>) 
         let n = n / len;
         let centre = poly.iter().copied().sum::<DVec3>() / poly.len() as f64;
         let d = -n.dot(centre);
-        let found = columns.iter().position(|c| {
-            c.truncate().dot(n) > 1.0 - COPLANAR && (c.w - d).abs() <= COPLANAR * size
-        });
+        // Columns are found by cells of (normal, d / size): a matching column differs by
+        // less than half a cell in each coordinate, so it lies in the polygon's cell or
+        // the neighbour on the nearer side of each coordinate (16 cells), and the search
+        // stays linear in the polygons (a body of a million facets has a million planes).
+        let q = [
+            n.x / NORMAL_CELL,
+            n.y / NORMAL_CELL,
+            n.z / NORMAL_CELL,
+            d / size / OFFSET_CELL,
+        ];
+        let base = q.map(|v| v.floor() as i64);
+        let mut found = None;
+        'probe: for bits in 0..16u32 {
+            let mut key = base;
+            for (a, k) in key.iter_mut().enumerate() {
+                if bits >> a & 1 == 1 {
+                    *k += if q[a] - q[a].floor() < 0.5 { -1 } else { 1 };
+                }
+            }
+            for &j in cells.get(&key).map_or(&[][..], Vec::as_slice) {
+                let c: DVec4 = columns[j];
+                if c.truncate().dot(n) > 1.0 - COPLANAR && (c.w - d).abs() <= COPLANAR * size {
+                    found = Some(j);
+                    break 'probe;
+                }
+            }
+        }
         of_polygon.push(Some(found.unwrap_or_else(|| {
             columns.push(n.extend(d));
+            cells.entry(base).or_default().push(columns.len() - 1);
             columns.len() - 1
         })));
     }
