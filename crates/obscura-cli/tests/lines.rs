@@ -353,7 +353,7 @@ fn algorithms_run_checked_and_refuse_what_they_cannot_draw() {
         assert!(
             std::fs::read_to_string(dir.join("d.svg"))
                 .unwrap()
-                .contains("<polyline")
+                .contains("<path d=\"M")
         );
     }
     let o = obscura(
