@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use clap::Args;
 use obscura::budget::MemoryBudget;
-use obscura::lines::horizon::{HeightField, HorizonOptions};
+use obscura::lines::horizon::{Curves, HeightField, HorizonOptions};
 use obscura::lines::json::LinesFile;
 use obscura::lines::plot::{PlotOptions, PlotStats, plot};
 use obscura::lines::preview::PreviewOptions;
@@ -155,8 +155,19 @@ pub struct LinesArgs {
     /// Samples on each side of a --function grid (2 to 10000).
     #[arg(long, value_name = "N", default_value = "100", value_parser = clap::value_parser!(u32).range(2..=10_000))]
     pub grid: u32,
+    /// Curves of a height field: z (constant z, the default), x (constant x) or both.
+    #[arg(long, value_name = "z|x|both", default_value = "z", value_parser = parse_curves)]
+    pub curves: Curves,
+    /// Ridgeline mode for a height field: the upper horizon only, each curve hiding
+    /// what lies behind its filled area.
+    #[arg(long)]
+    pub ridgeline: bool,
     #[command(flatten)]
     pub naming: OutputArgs,
+}
+
+fn parse_curves(s: &str) -> std::result::Result<Curves, String> {
+    Curves::parse(s).map_err(|e| reason(&e))
 }
 
 fn parse_edges(s: &str) -> std::result::Result<EdgeKinds, String> {
@@ -425,6 +436,8 @@ pub fn run(args: &LinesArgs) -> Result<()> {
         let mut options = HorizonOptions::default();
         options.memory_limit = args.view.memory_limit;
         options.hidden = args.hidden != HiddenStyle::None;
+        options.curves = args.curves;
+        options.ridgeline = args.ridgeline;
         let (drawing, stats) = horizon::draw(&field, &camera, viewport, &options)?;
         let drawn = Drawn {
             drawing,

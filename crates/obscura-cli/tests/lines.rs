@@ -416,3 +416,46 @@ fn algorithms_run_checked_and_refuse_what_they_cannot_draw() {
     assert!(o.status.success(), "{}", text(&o));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A height field's two families of curves and the ridgeline mode run from the CLI; an
+/// unknown family is refused naming the flag.
+#[test]
+fn height_field_curves_and_ridgeline() {
+    let dir = tempdir("curves");
+    for extra in [&["--curves", "both"][..], &["--ridgeline"][..]] {
+        let mut args = vec![
+            "lines",
+            "--algo",
+            "horizon",
+            "--function",
+            "bumps",
+            "--grid",
+            "30",
+            "-o",
+            "c.svg",
+        ];
+        args.extend_from_slice(extra);
+        let o = obscura(&args, &dir);
+        assert!(o.status.success(), "{extra:?}: {}", text(&o));
+    }
+    let o = obscura(
+        &[
+            "lines",
+            "--algo",
+            "horizon",
+            "--function",
+            "bumps",
+            "--curves",
+            "y",
+            "-o",
+            "d.svg",
+        ],
+        &dir,
+    );
+    assert!(
+        !o.status.success() && text(&o).contains("--curves"),
+        "{}",
+        text(&o)
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
