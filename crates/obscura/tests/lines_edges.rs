@@ -437,6 +437,8 @@ fn edge_keys(e: &[DrawnEdge]) -> BTreeSet<(EdgeKind, [u64; 3], [u64; 3])> {
         .collect()
 }
 
+// Reads STL and OBJ files: built with those formats (default features).
+#[cfg(all(feature = "stl", feature = "obj"))]
 #[test]
 fn a_triangle_soup_draws_as_the_indexed_mesh() {
     let (pos, tris) = torus_triangles();
