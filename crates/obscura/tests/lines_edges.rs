@@ -404,6 +404,7 @@ fn interpenetrating_boxes_meet_in_a_closed_loop() {
     }
 }
 
+#[cfg(all(feature = "stl", feature = "obj"))]
 /// A torus of triangles with coordinates on a grid of 1/256 (exact in `f32`, as STL
 /// stores them).
 fn torus_triangles() -> (Vec<DVec3>, Vec<[u32; 3]>) {
@@ -423,6 +424,7 @@ fn torus_triangles() -> (Vec<DVec3>, Vec<[u32; 3]>) {
     (pos, tris)
 }
 
+#[cfg(all(feature = "stl", feature = "obj"))]
 /// The edges as comparable keys: kind and world ends, ends ordered.
 fn edge_keys(e: &[DrawnEdge]) -> BTreeSet<(EdgeKind, [u64; 3], [u64; 3])> {
     e.iter()
