@@ -173,6 +173,8 @@ impl LinesFile {
                 ),
             ));
         }
+        // The picture's size as any image of the crate: at most `MAX_SIDE` a side.
+        crate::Viewport::new(u64::from(self.width), u64::from(self.height))?;
         let mut d = Drawing::new(self.width, self.height);
         for (k, e) in self.edges.iter().enumerate() {
             if e.edge as usize != k {
@@ -296,6 +298,11 @@ mod tests {
         let mut f = LinesFile::from_drawing(&drawing()).unwrap();
         f.version = 99;
         assert!(f.to_drawing().is_err());
+        // A picture larger than any image the crate makes (its preview would not fit).
+        let mut f = LinesFile::from_drawing(&drawing()).unwrap();
+        f.width = 4_000_000_000;
+        let e = f.to_drawing().unwrap_err().to_string();
+        assert!(e.contains("4000000000"), "{e}");
         assert!(LinesFile::from_json("{\"format\": 1}").is_err());
     }
 }

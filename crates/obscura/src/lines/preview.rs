@@ -12,6 +12,9 @@ use std::path::Path;
 
 use glam::DVec2;
 
+use crate::clip::liang_barsky::clip_segment_2d;
+use crate::clip::window::Rect;
+
 use super::plot::{Plot, Polyline};
 use super::svg::HiddenStyle;
 use crate::{Result, RgbImage};
@@ -77,11 +80,16 @@ pub fn render(plot: &Plot, options: &PreviewOptions) -> Result<RgbImage> {
     let mut image = RgbImage::new(width, height);
     image.pixels.fill([255; 3]);
     let n = width as usize * height as usize;
+    // Dashes are cut only inside the picture (and a stroke's width around it): a
+    // segment of a drawing read back from JSON may be any length.
+    let pad = w + 1.0;
+    let area = Rect::new(-pad, -pad, f64::from(width) + pad, f64::from(height) + pad)
+        .map_err(|_| crate::Error::option("preview", "picture size out of range"))?;
     let mut layers: Vec<(Vec<f32>, [u8; 3])> = Vec::new();
     if options.hidden != HiddenStyle::None {
         let mut cover = vec![0f32; n];
         for l in &plot.hidden {
-            for [a, b] in segments(l, options.hidden == HiddenStyle::Dashed) {
+            for [a, b] in segments(l, options.hidden == HiddenStyle::Dashed, &area) {
                 stroke(&mut cover, width, height, a, b, w, options.antialias);
             }
         }
@@ -89,7 +97,7 @@ pub fn render(plot: &Plot, options: &PreviewOptions) -> Result<RgbImage> {
     }
     let mut cover = vec![0f32; n];
     for l in &plot.visible {
-        for [a, b] in segments(l, false) {
+        for [a, b] in segments(l, false, &area) {
             stroke(&mut cover, width, height, a, b, w, options.antialias);
         }
     }
@@ -113,8 +121,9 @@ pub fn write_png(plot: &Plot, options: &PreviewOptions, path: &Path) -> Result<(
 }
 
 /// The segments of a polyline, cut into dashes when asked (dashes run on across the
-/// polyline's joints).
-fn segments(line: &Polyline, dashed: bool) -> Vec<[DVec2; 2]> {
+/// polyline's joints). Dashes are made only for the part of a segment inside `area`;
+/// the part outside still advances the dash pattern.
+fn segments(line: &Polyline, dashed: bool, area: &Rect) -> Vec<[DVec2; 2]> {
     let pairs = line.points.windows(2).map(|w| [w[0], w[1]]);
     if !dashed {
         return pairs.collect();
@@ -122,11 +131,17 @@ fn segments(line: &Polyline, dashed: bool) -> Vec<[DVec2; 2]> {
     let period = DASH[0] + DASH[1];
     let mut out = Vec::new();
     let mut phase = 0.0f64; // position within the period at the segment's start
-    for [a, b] in pairs {
-        let len = a.distance(b);
-        if len == 0.0 {
+    for [a0, b0] in pairs {
+        let full = a0.distance(b0);
+        if !(full > 0.0) {
             continue;
         }
+        let Some((a, b)) = clip_segment_2d(a0, b0, area) else {
+            phase = (phase + full) % period;
+            continue;
+        };
+        phase = (phase + a0.distance(a)) % period;
+        let len = a.distance(b);
         let mut s = 0.0;
         while s < len {
             let in_dash = phase < DASH[0];
@@ -142,6 +157,7 @@ fn segments(line: &Polyline, dashed: bool) -> Vec<[DVec2; 2]> {
             s += step;
             phase = (phase + step) % period;
         }
+        phase = (phase + b.distance(b0)) % period;
     }
     out
 }
@@ -215,6 +231,41 @@ mod tests {
             visible: conv(lines),
             hidden: conv(hidden),
         }
+    }
+
+    #[test]
+    fn dashes_are_cut_only_inside_the_picture() {
+        // A segment of 1e18 px (as a drawing read back from JSON may hold) crossing the
+        // 20 x 10 picture: dashes only where it can show, the pattern kept in phase.
+        let area = Rect::new(-2.0, -2.0, 22.0, 12.0).unwrap();
+        let far = Polyline {
+            points: vec![DVec2::new(-1e18, 5.0), DVec2::new(1e18, 5.0)],
+        };
+        let d = segments(&far, true, &area);
+        assert!(d.len() <= 4, "{d:?}");
+        assert!(d.iter().flatten().all(|p| p.x >= -2.0 && p.x <= 22.0));
+        // At 1e9 px the clipped part is still exact enough to be dashed.
+        let long = Polyline {
+            points: vec![DVec2::new(-1e9, 5.0), DVec2::new(1e9, 5.0)],
+        };
+        let d = segments(&long, true, &area);
+        assert!((2..=4).contains(&d.len()), "{d:?}");
+        assert!(
+            d.iter()
+                .flatten()
+                .all(|p| p.x >= -2.0 - 1e-6 && p.x <= 22.0 + 1e-6)
+        );
+        // Inside the picture, the same dashes as the segment cut to it beforehand.
+        let near = Polyline {
+            points: vec![DVec2::new(-2.0, 5.0), DVec2::new(22.0, 5.0)],
+        };
+        let whole = Polyline {
+            points: vec![DVec2::new(-12.0, 5.0), DVec2::new(22.0, 5.0)],
+        };
+        let (a, b) = (segments(&near, true, &area), segments(&whole, true, &area));
+        let period = DASH[0] + DASH[1];
+        assert_eq!(10.0 % period, 0.0, "the test shifts by whole periods");
+        assert_eq!(a, b);
     }
 
     #[test]
