@@ -11,27 +11,10 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{DMat4, DQuat, DVec3};
+use obscura::bench_support::SplitMix64;
 use obscura::lines::roberts::{RobertsOptions, draw};
 use obscura::scene::{Camera, ObjectDesc, Scene, Viewport, demo};
 use obscura::view::{PrepareOptions, View};
-
-/// SplitMix64 (Steele, Lea and Flood 2014), local to this file: the crate's own
-/// generator is not public API.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64))
-    }
-}
 
 /// The city demo's buildings (every object but the ground).
 fn city() -> (Scene, Camera) {
