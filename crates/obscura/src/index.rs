@@ -213,6 +213,7 @@ pub struct SceneIndex<'s> {
     grids: Keyed<(GridOptions, u64), UniformGrid>,
     bsp: Keyed<BspOptions, BspTree>,
     octrees: Keyed<(u32, u64), Octree>,
+    clusters: OnceLock<crate::cull::clusters::Clusters>,
     counters: Counters,
 }
 
@@ -239,6 +240,7 @@ impl<'s> SceneIndex<'s> {
             grids: Keyed::default(),
             bsp: Keyed::default(),
             octrees: Keyed::default(),
+            clusters: OnceLock::new(),
             counters: Counters::default(),
         }
     }
@@ -287,6 +289,26 @@ impl<'s> SceneIndex<'s> {
             self.counters.bvh.fetch_add(1, Ordering::Relaxed);
             bvh
         })
+    }
+
+    /// The scene's clusters of about a hundred triangles with their boxes, the unit of
+    /// occlusion culling inside big objects (built once).
+    pub fn clusters(&self) -> &crate::cull::clusters::Clusters {
+        self.clusters
+            .get_or_init(|| crate::cull::clusters::Clusters::new(self.scene))
+    }
+
+    /// Decides what one view cannot see ([`crate::cull::occlusion::cull`]).
+    ///
+    /// # Errors
+    /// As [`crate::cull::occlusion::cull`].
+    pub fn cull(
+        &self,
+        camera: &crate::Camera,
+        viewport: crate::Viewport,
+        options: &crate::cull::occlusion::CullOptions,
+    ) -> Result<crate::cull::occlusion::Culling> {
+        crate::cull::occlusion::cull(self, camera, viewport, options)
     }
 
     /// The edge adjacency of every object's mesh, in object order (built once).

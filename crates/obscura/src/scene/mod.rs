@@ -203,6 +203,7 @@ pub struct Scene {
     report: LoadReport,
     face_count: u32,
     sources: Vec<PathBuf>,
+    cells: Option<Arc<crate::cull::portals::CellGraph>>,
 }
 
 /// Colours given to objects that have none, in order.
@@ -372,6 +373,18 @@ impl Scene {
     #[must_use]
     pub fn camera(&self) -> Option<&Camera> {
         self.camera.as_ref()
+    }
+
+    /// The scene's cells and portals, if it has them (a scene file's `[[cell]]` and
+    /// `[[portal]]` tables, a demo level, a PRT1 file), for portal culling.
+    #[must_use]
+    pub fn cells(&self) -> Option<&Arc<crate::cull::portals::CellGraph>> {
+        self.cells.as_ref()
+    }
+
+    /// Gives the scene its cells and portals (or takes them away).
+    pub fn set_cells(&mut self, cells: Option<Arc<crate::cull::portals::CellGraph>>) {
+        self.cells = cells;
     }
 
     /// Sets the scene's camera.

@@ -128,7 +128,7 @@ fn view_data<'v>(tree: &BspTree, view: &'v View<'_>) -> ViewData<'v> {
         visible,
         eye,
         polygon_base: view.polygon_base(),
-        back_facing: view.back_facing(),
+        back_facing: view.skipped_polygons(),
     }
 }
 

@@ -58,6 +58,11 @@ pub struct View<'s> {
     pub(super) polygon_base: Vec<u32>,
     /// Per scene polygon, whether it is a culled back face (false for objects not kept).
     pub(super) back_facing: Vec<bool>,
+    /// Per scene polygon, whether the face pass skips it: a back face or a face the
+    /// occlusion stage culled; `None` when nothing but back faces is skipped.
+    pub(super) skip: Option<Vec<bool>>,
+    /// The occlusion stage's decisions, if the view was made with one.
+    pub(super) culling: Option<crate::cull::occlusion::Culling>,
     /// Time of the back-face pass, reported with the face pass's stage.
     pub(super) back_face_ms: f64,
     pub(super) stats: PipelineStats,
@@ -75,12 +80,49 @@ impl<'s> View<'s> {
         viewport: Viewport,
         options: &PrepareOptions,
     ) -> Result<View<'s>> {
+        Self::build(scene, camera, viewport, options, None)
+    }
+
+    /// A view that leaves out what an occlusion-culling run decided
+    /// ([`crate::cull::occlusion::cull`], [`crate::SceneIndex::cull`]) for the same
+    /// camera and viewport: objects culled whole are never transformed, faces of culled
+    /// clusters never reach an algorithm. The picture is the same as without it.
+    ///
+    /// # Errors
+    /// As [`Self::new`]; and a culling run made for another scene (its counts differ).
+    pub fn new_culled(
+        scene: &'s Scene,
+        camera: &Camera,
+        viewport: Viewport,
+        options: &PrepareOptions,
+        culling: crate::cull::occlusion::Culling,
+    ) -> Result<View<'s>> {
+        let polygons: usize = scene.objects().iter().map(|o| o.mesh.polygon_count()).sum();
+        if culling.objects.len() != scene.objects().len() || culling.faces.len() != polygons {
+            return Err(crate::Error::InvalidOption {
+                option: "culling".into(),
+                reason: "a culling run made for another scene".into(),
+            });
+        }
+        Self::build(scene, camera, viewport, options, Some(culling))
+    }
+
+    fn build(
+        scene: &'s Scene,
+        camera: &Camera,
+        viewport: Viewport,
+        options: &PrepareOptions,
+        culling: Option<crate::cull::occlusion::Culling>,
+    ) -> Result<View<'s>> {
         viewport.validate()?;
         let t = checked_transform(scene, camera, viewport)?;
         let mut stats = PipelineStats::default();
         let threads = passes::thread_count();
 
         let mut visible = visible_objects(scene, &t, options, &mut stats);
+        if let Some(c) = &culling {
+            visible.retain(|&(k, _)| c.objects[k].is_none());
+        }
 
         // Vertices: world -> eye -> clip, outcodes, screen positions.
         let start = Instant::now();
@@ -126,6 +168,19 @@ impl<'s> View<'s> {
             },
             threads,
         );
+        let skip = culling.as_ref().and_then(|c| {
+            let any = visible.iter().any(|&(k, _)| {
+                let (a, b) = (polygon_base[k] as usize, polygon_base[k + 1] as usize);
+                c.faces[a..b].iter().any(|&f| f)
+            });
+            any.then(|| {
+                back_facing
+                    .iter()
+                    .zip(&c.faces)
+                    .map(|(&b, &f)| b || f)
+                    .collect()
+            })
+        });
         let back_face_ms = start.elapsed().as_secs_f64() * 1e3;
 
         Ok(View {
@@ -141,6 +196,8 @@ impl<'s> View<'s> {
             codes,
             polygon_base,
             back_facing,
+            skip,
+            culling,
             back_face_ms,
             stats,
         })
@@ -211,11 +268,25 @@ impl<'s> View<'s> {
         &self.back_facing
     }
 
+    /// Per scene polygon, whether the face pass skips it: a back face, or a face the
+    /// occlusion stage culled ([`Self::new_culled`]).
+    #[must_use]
+    pub fn skipped_polygons(&self) -> &[bool] {
+        self.skip.as_deref().unwrap_or(&self.back_facing)
+    }
+
+    /// The occlusion stage's decisions, for a view made by [`Self::new_culled`].
+    #[must_use]
+    pub fn culling(&self) -> Option<&crate::cull::occlusion::Culling> {
+        self.culling.as_ref()
+    }
+
     /// Per scene polygon, whether the view culls it: its object is outside the frustum
-    /// or it is a back face. What the ray casters ignore.
+    /// or culled by the occlusion stage, or it is a back face or in a culled cluster.
+    /// What the ray casters ignore.
     #[must_use]
     pub fn culled_polygons(&self) -> Vec<bool> {
-        let mut out = self.back_facing.clone();
+        let mut out = self.skipped_polygons().to_vec();
         for (k, w) in self.polygon_base.windows(2).enumerate() {
             if !self.kept[k] {
                 out[w[0] as usize..w[1] as usize].fill(true);

@@ -37,6 +37,7 @@ mod transform;
 pub use decisions::View;
 pub use options::PrepareOptions;
 pub use polygon::ViewPolygon;
+pub(crate) use prepare::checked_transform;
 pub use prepare::{BUDGET_STRUCTURE, PreparedView, fitted_orthographic_planes, prepare};
 pub use stats::{PipelineStats, StageStats};
 pub use transform::{ModelView, ViewTransform, ViewVertex};

@@ -114,7 +114,7 @@ impl<'s> View<'s> {
             codes: &self.codes,
             t: &self.transform,
             polygon_base: &self.polygon_base,
-            back_facing: &self.back_facing,
+            back_facing: self.skip.as_deref().unwrap_or(&self.back_facing),
         };
         let out = passes::process_faces(&ctx, face_total, threads);
         self.vertices.extend_from_slice(&out.clipped_vertices);
@@ -234,7 +234,7 @@ pub(super) fn confirm_inside(
 /// The transform of a camera whose view the scene's coordinates resolve (checked by
 /// [`Camera::validate_for`] and [`Camera::validate_window`]), with an orthographic
 /// camera's planes fitted to the scene ([`fitted_orthographic_planes`]).
-pub(super) fn checked_transform(
+pub(crate) fn checked_transform(
     scene: &Scene,
     camera: &Camera,
     viewport: Viewport,

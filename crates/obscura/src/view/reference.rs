@@ -215,6 +215,8 @@ pub(super) fn prepare_reference<'s>(
         codes: Vec::new(),
         polygon_base,
         back_facing,
+        skip: None,
+        culling: None,
         back_face_ms: 0.0,
         stats,
     };
