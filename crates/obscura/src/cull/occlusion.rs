@@ -216,6 +216,9 @@ pub struct Culling {
     pub faces: Vec<bool>,
     /// What the method wants the user to know (fallbacks taken, leaks found).
     pub notes: Vec<String>,
+    /// The occlusion buffer's depths, for [`CullMethod::Buffer`] (what `--explain`
+    /// draws beside the culled objects).
+    pub buffer_image: Option<BufferImage>,
     /// Counts and times.
     pub stats: CullStats,
 }
@@ -233,6 +236,7 @@ impl Culling {
             occluders: Vec::new(),
             faces: vec![false; faces],
             notes: Vec::new(),
+            buffer_image: None,
             stats: CullStats::default(),
         }
     }
@@ -303,6 +307,19 @@ impl Culling {
             .stages
             .push((name.to_owned(), start.elapsed().as_secs_f64() * 1e3));
     }
+}
+
+/// An occlusion buffer's depths as an image: row 0 at the top, one value per buffer
+/// pixel (per tile pixel for a masked buffer: the tile's conservative depth), the
+/// eye-space depth behind which a box is hidden; `f32::INFINITY` where nothing covers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BufferImage {
+    /// Width in buffer pixels.
+    pub width: u32,
+    /// Height in buffer pixels.
+    pub height: u32,
+    /// `width * height` depths.
+    pub depth: Vec<f32>,
 }
 
 /// Decides what one view of the index's scene cannot see. The frustum stage runs first

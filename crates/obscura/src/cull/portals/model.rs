@@ -34,3 +34,19 @@ pub struct CellGraph {
     /// The portals.
     pub portals: Vec<Portal>,
 }
+
+impl CellGraph {
+    /// The cell that holds point `p` (inside or on the boundary of), or `None` for a
+    /// point outside every cell. The first such cell in order when cells share the
+    /// point on a common boundary.
+    ///
+    /// CONTRACT: a linear scan; the builder replaces it by the BSP tree over cell
+    /// boundaries (O(log n)) with the same answers.
+    #[must_use]
+    pub fn locate(&self, p: DVec3) -> Option<u32> {
+        self.cells
+            .iter()
+            .position(|c| c.planes.iter().all(|pl| pl.signed_distance(p) <= 1e-9))
+            .map(|i| i as u32)
+    }
+}
