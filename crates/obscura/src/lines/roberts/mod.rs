@@ -384,6 +384,40 @@ impl Tester<'_> {
         });
     }
 
+    /// The box and depth tests of body `i` against the edge part `t0..t1` (whose box
+    /// after the divide is `lo..hi`), then its rows `p, q, w` into `self.rows`, and
+    /// the trivial test. True when the rows are loaded and the body may hide a part.
+    #[allow(clippy::too_many_arguments)]
+    fn load_rows(
+        &mut self,
+        stats: &mut RobertsStats,
+        i: usize,
+        s: DVec4,
+        d: DVec4,
+        t0: f64,
+        t1: f64,
+        lo: DVec3,
+        hi: DVec3,
+    ) -> Result<bool> {
+        let body = &self.bodies[i];
+        if !may_hide(body, lo, hi) {
+            return Ok(false);
+        }
+        stats.edge_body_tests += 1;
+        self.deadline.check(WORK)?;
+        self.rows.clear();
+        self.rows.extend(body.hiding.iter().map(|v| Row {
+            p: s.dot(*v),
+            q: d.dot(*v),
+            w: TOWARDS_VIEWER.dot(*v),
+        }));
+        if trivially_visible(&self.rows, t0, t1) {
+            stats.trivially_visible += 1;
+            return Ok(false);
+        }
+        Ok(true)
+    }
+
     /// Quantitative mode: the changes of the count of faces in front along the edge
     /// part `t0..t1`, into `self.events`. A body hiding a point puts two faces in front
     /// of it, one when the point is inside it or on it.
@@ -396,28 +430,12 @@ impl Tester<'_> {
         t1: f64,
         own: Option<usize>,
     ) -> Result<()> {
-        let (a, b) = (s + d * t0, s + d * t1);
-        let (pa, pb) = (a.truncate() / a.w, b.truncate() / b.w);
-        let (lo, hi) = (pa.min(pb), pa.max(pb));
-        let scale = edge_scale(s, d);
+        let (lo, hi, scale) = edge_box(s, d, t0, t1);
         for &i in self.priority {
-            let body = &self.bodies[i];
-            if Some(i) == own || !may_hide(body, lo, hi) {
+            if Some(i) == own || !self.load_rows(stats, i, s, d, t0, t1, lo, hi)? {
                 continue;
             }
-            stats.edge_body_tests += 1;
-            self.deadline.check(WORK)?;
-            self.rows.clear();
-            self.rows.extend(body.hiding.iter().map(|v| Row {
-                p: s.dot(*v),
-                q: d.dot(*v),
-                w: TOWARDS_VIEWER.dot(*v),
-            }));
-            if trivially_visible(&self.rows, t0, t1) {
-                stats.trivially_visible += 1;
-                continue;
-            }
-            let penetration = body.lo.z <= hi.z;
+            let penetration = self.bodies[i].lo.z <= hi.z;
             let Some((h0, h1)) = solve(&self.rows, t0, t1, penetration, scale) else {
                 continue;
             };
@@ -447,31 +465,12 @@ impl Tester<'_> {
         t1: f64,
         own: Option<usize>,
     ) -> Result<()> {
-        let (a, b) = (s + d * t0, s + d * t1);
-        let (pa, pb) = (a.truncate() / a.w, b.truncate() / b.w);
-        let (lo, hi) = (pa.min(pb), pa.max(pb));
-        let scale = edge_scale(s, d);
+        let (lo, hi, scale) = edge_box(s, d, t0, t1);
         for &i in self.priority {
-            let body = &self.bodies[i];
-            if Some(i) == own {
+            if Some(i) == own || !self.load_rows(stats, i, s, d, t0, t1, lo, hi)? {
                 continue;
             }
-            if !may_hide(body, lo, hi) {
-                continue;
-            }
-            let penetration = body.lo.z <= hi.z;
-            stats.edge_body_tests += 1;
-            self.deadline.check(WORK)?;
-            self.rows.clear();
-            self.rows.extend(body.hiding.iter().map(|v| Row {
-                p: s.dot(*v),
-                q: d.dot(*v),
-                w: TOWARDS_VIEWER.dot(*v),
-            }));
-            if trivially_visible(&self.rows, t0, t1) {
-                stats.trivially_visible += 1;
-                continue;
-            }
+            let penetration = self.bodies[i].lo.z <= hi.z;
             self.next.clear();
             for &(ta, tb) in &self.visible {
                 match solve(&self.rows, ta, tb, penetration, scale) {
@@ -493,6 +492,13 @@ impl Tester<'_> {
         }
         Ok(())
     }
+}
+
+/// The box of the edge part `t0..t1` after the divide, and the edge's scale.
+fn edge_box(s: DVec4, d: DVec4, t0: f64, t1: f64) -> (DVec3, DVec3, f64) {
+    let (a, b) = (s + d * t0, s + d * t1);
+    let (pa, pb) = (a.truncate() / a.w, b.truncate() / b.w);
+    (pa.min(pb), pa.max(pb), edge_scale(s, d))
 }
 
 /// The hidden interval by the seed's pairwise solutions, or by clipping for bodies of
