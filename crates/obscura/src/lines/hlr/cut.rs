@@ -66,34 +66,9 @@ pub(super) fn pixel(t: &ViewTransform, clip: [DVec4; 2], u: f64) -> DVec2 {
 /// The parameter interval of the segment `clip[0] -> clip[1]` inside the view volume
 /// `-w <= x, y, z <= w` (Liang-Barsky), `None` when empty or a single point.
 pub(super) fn clip_parameter(clip: [DVec4; 2]) -> Option<[f64; 2]> {
-    let (a, b) = (clip[0], clip[1]);
-    let (mut lo, mut hi) = (0.0f64, 1.0f64);
-    let planes = |c: DVec4| {
-        [
-            c.w + c.x,
-            c.w - c.x,
-            c.w + c.y,
-            c.w - c.y,
-            c.w + c.z,
-            c.w - c.z,
-        ]
-    };
-    let (pa, pb) = (planes(a), planes(b));
-    for k in 0..6 {
-        let (fa, fb) = (pa[k], pb[k]);
-        if !(fa.is_finite() && fb.is_finite()) {
-            return None;
-        }
-        if fa < 0.0 && fb < 0.0 {
-            return None;
-        }
-        if fa < 0.0 {
-            lo = lo.max(fa / (fa - fb));
-        } else if fb < 0.0 {
-            hi = hi.min(fa / (fa - fb));
-        }
-    }
-    (lo < hi).then_some([lo, hi])
+    crate::clip::liang_barsky::homogeneous_parameters(clip[0], clip[1])
+        .filter(|(lo, hi)| lo < hi)
+        .map(|(lo, hi)| [lo, hi])
 }
 
 /// The part of an edge one occluder hides.

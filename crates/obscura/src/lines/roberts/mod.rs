@@ -527,24 +527,7 @@ fn may_hide(body: &Body, lo: DVec3, hi: DVec3) -> bool {
 /// z <= w` (Liang-Barsky in homogeneous coordinates); `None` when it is empty or a
 /// point.
 fn clip_to_view(s: DVec4, d: DVec4) -> Option<(f64, f64)> {
-    let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    let e = s + d;
-    for k in 0..3 {
-        for sign in [1.0, -1.0] {
-            // f = w + sign * x_k >= 0.
-            let f0 = s.w + sign * s[k];
-            let f1 = e.w + sign * e[k];
-            if f0 < 0.0 && f1 < 0.0 {
-                return None;
-            }
-            if f0 < 0.0 {
-                t0 = t0.max(f0 / (f0 - f1));
-            } else if f1 < 0.0 {
-                t1 = t1.min(f0 / (f0 - f1));
-            }
-        }
-    }
-    (t1 - t0 > 1e-12).then_some((t0, t1))
+    crate::clip::liang_barsky::homogeneous_parameters(s, s + d).filter(|(t0, t1)| t1 - t0 > 1e-12)
 }
 
 #[cfg(test)]
