@@ -186,11 +186,8 @@ impl ViewTransform {
             if !(clip.w > 0.0) {
                 return None;
             }
-            let (x, y) = (
-                (clip.x / clip.w + 1.0) * 0.5 * self.width,
-                (1.0 - clip.y / clip.w) * 0.5 * self.height,
-            );
-            r = (r.0.min(x), r.1.min(y), r.2.max(x), r.3.max(y));
+            let p = self.clip_to_pixel(clip);
+            r = (r.0.min(p.x), r.1.min(p.y), r.2.max(p.x), r.3.max(p.y));
         }
         Some(r)
     }
@@ -270,6 +267,17 @@ impl ViewTransform {
         } else {
             self.near / zq
         }
+    }
+
+    /// The pixel position of a clip-space point in front of the eye (`w > 0`): divide by
+    /// `w`, map `x` right and `y` down, as a [`crate::Frame`].
+    #[inline]
+    #[must_use]
+    pub fn clip_to_pixel(&self, clip: DVec4) -> glam::DVec2 {
+        glam::DVec2::new(
+            (clip.x / clip.w + 1.0) * 0.5 * self.width,
+            (1.0 - clip.y / clip.w) * 0.5 * self.height,
+        )
     }
 
     /// Divide by w and map to pixels. Only meaningful inside the view volume.

@@ -56,11 +56,7 @@ impl EdgeSetup {
 /// The image in pixels of the point at parameter `u` of the segment with clip-space
 /// ends `clip` (x right, y down, as a `Frame`).
 pub(super) fn pixel(t: &ViewTransform, clip: [DVec4; 2], u: f64) -> DVec2 {
-    let c = clip[0] + (clip[1] - clip[0]) * u;
-    DVec2::new(
-        (c.x / c.w + 1.0) * 0.5 * t.width,
-        (1.0 - c.y / c.w) * 0.5 * t.height,
-    )
+    t.clip_to_pixel(clip[0] + (clip[1] - clip[0]) * u)
 }
 
 /// The parameter interval of the segment `clip[0] -> clip[1]` inside the view volume

@@ -229,10 +229,7 @@ impl Occluders {
                 ];
                 let mut near_depth = f64::INFINITY;
                 for (w, c) in poly {
-                    let (x, y) = (
-                        (c.x / c.w + 1.0) * 0.5 * t.width,
-                        (1.0 - c.y / c.w) * 0.5 * t.height,
-                    );
+                    let glam::DVec2 { x, y } = t.clip_to_pixel(*c);
                     bbox = [
                         bbox[0].min(x),
                         bbox[1].min(y),

@@ -137,8 +137,8 @@ pub(super) struct Space {
     pub planes: DMat4,
     /// The eye (the origin of the relative world coordinates).
     pub eye: DVec3,
-    pub width: f64,
-    pub height: f64,
+    /// The view's transform (its pixel mapping: z is not flipped in x, y and w).
+    pub view: crate::view::ViewTransform,
 }
 
 impl Space {
@@ -153,8 +153,7 @@ impl Space {
             m,
             planes: m.inverse().transpose(),
             eye: t.eye,
-            width: t.width,
-            height: t.height,
+            view: *t,
         }
     }
 
@@ -180,10 +179,7 @@ impl Space {
     /// The pixel position of a transformed point (in front of the eye).
     #[inline]
     pub fn pixel(&self, x: DVec4) -> glam::DVec2 {
-        glam::DVec2::new(
-            (x.x / x.w + 1.0) * 0.5 * self.width,
-            (1.0 - x.y / x.w) * 0.5 * self.height,
-        )
+        self.view.clip_to_pixel(x)
     }
 }
 

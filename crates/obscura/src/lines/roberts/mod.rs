@@ -191,7 +191,7 @@ pub fn draw(view: &View, options: &RobertsOptions) -> Result<(Drawing, RobertsSt
     let mut priority: Vec<usize> = (0..bodies.len()).collect();
     priority.sort_by(|&a, &b| bodies[a].hi.z.total_cmp(&bodies[b].hi.z).then(a.cmp(&b)));
 
-    let mut drawing = Drawing::new(space.width as u32, space.height as u32);
+    let mut drawing = Drawing::new(space.view.width as u32, space.view.height as u32);
     let mut tester = Tester {
         space: &space,
         bodies: &bodies,
