@@ -14,6 +14,7 @@ pub mod kdop;
 pub mod obb;
 mod plane;
 mod polygon;
+mod predicates;
 pub(crate) mod slab;
 mod sphere;
 mod triangulate;
@@ -23,6 +24,7 @@ pub use kdop::{Kdop, KdopKind, RaySlabs};
 pub use obb::Obb;
 pub use plane::{Plane, PlaneSide};
 pub use polygon::{is_convex, max_plane_deviation, newell_normal, polygon_area, polygon_centroid};
+pub use predicates::orient3d;
 pub use sphere::Sphere;
 #[cfg(test)]
 pub(crate) use triangulate::triangulate_within;

@@ -38,21 +38,7 @@ pub struct IntersectionSegment {
     pub world: [DVec3; 2],
 }
 
-fn coord(p: DVec3) -> robust::Coord3D<f64> {
-    robust::Coord3D {
-        x: p.x,
-        y: p.y,
-        z: p.z,
-    }
-}
-
-/// Shewchuk's `orient3d`: positive when `d` lies below the plane of `a, b, c` (the side
-/// from which `a, b, c` appear clockwise), negative above, zero on it; the sign is exact.
-#[inline]
-#[must_use]
-pub fn orient3d(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
-    robust::orient3d(coord(a), coord(b), coord(c), coord(d))
-}
+use crate::geom::orient3d;
 
 /// Where triangle `t` meets the plane its orientation values `o` refer to: one or two
 /// points (`None` when it lies wholly on one side or in the plane).

@@ -154,7 +154,7 @@ fn polygon_info(object: &Object, world: &[DVec3], p: usize, facing: Facing) -> P
         Facing::Direction(f) => a - f,
     };
     // orient3d < 0: `d` on the side from which a, b, c turn counter-clockwise.
-    let o = intersect::orient3d(a, b, c, d);
+    let o = crate::geom::orient3d(a, b, c, d);
     let front = if object.mirrored { o > 0.0 } else { o < 0.0 };
     PolygonInfo {
         front,

@@ -112,19 +112,10 @@ pub(super) struct Occluders {
     pub edge_on: u64,
 }
 
-#[inline]
-fn coord3(v: DVec3) -> robust::Coord3D<f64> {
-    robust::Coord3D {
-        x: v.x,
-        y: v.y,
-        z: v.z,
-    }
-}
-
 /// `((p1 - p0) x (p2 - p0)) . (x - p0)`, exact in sign.
 fn plane_exact(p: &[DVec3; 3], x: DVec3) -> f64 {
     // orient3d(a, b, c, x) = det[a - x; b - x; c - x] = -((b - a) x (c - a)) . (x - a).
-    -robust::orient3d(coord3(p[0]), coord3(p[1]), coord3(p[2]), coord3(x))
+    -crate::geom::orient3d(p[0], p[1], p[2], x)
 }
 
 /// How the eye sees: from a point, or along a direction.
