@@ -428,22 +428,37 @@ fn open_meshes_and_interpenetrating_boxes_agree_with_ray_casting() {
     ]);
     let mut rng = SplitMix64(7);
     for scene in [&open, &boxes] {
-        for k in 0..4 {
-            let dir = DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            )
-            .normalize_or(DVec3::Z);
-            let eye = dir * rng.range(2.5, 4.0);
-            let camera = if k % 2 == 1 {
-                ortho(eye, DVec3::ZERO, 3.5)
-            } else {
-                persp(eye, DVec3::ZERO)
-            };
+        for camera in views_around_origin(&mut rng, -1.0, (2.5, 4.0), 3.5) {
             assert_oracle(scene, &camera, 300, 300);
         }
     }
+}
+
+/// Four cameras looking at the origin from random directions (`y` of the direction
+/// from `y_lo` to 1) at a random distance in `distance`, alternately perspective and
+/// orthographic (of window height `ortho_height`).
+fn views_around_origin(
+    rng: &mut SplitMix64,
+    y_lo: f64,
+    distance: (f64, f64),
+    ortho_height: f64,
+) -> Vec<Camera> {
+    (0..4)
+        .map(|k| {
+            let dir = DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(y_lo, 1.0),
+                rng.range(-1.0, 1.0),
+            )
+            .normalize_or(DVec3::Z);
+            let eye = dir * rng.range(distance.0, distance.1);
+            if k % 2 == 1 {
+                ortho(eye, DVec3::ZERO, ortho_height)
+            } else {
+                persp(eye, DVec3::ZERO)
+            }
+        })
+        .collect()
 }
 
 #[test]
@@ -488,19 +503,7 @@ fn coplanar_touching_faces_and_thin_triangles_agree_with_ray_casting() {
     let thin = Scene::from_arrays(&p, Faces::Triangles(&t)).unwrap();
     let mut rng = SplitMix64(3);
     for scene in [&touching, &thin] {
-        for k in 0..4 {
-            let dir = DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-0.2, 1.0),
-                rng.range(-1.0, 1.0),
-            )
-            .normalize_or(DVec3::Z);
-            let eye = dir * rng.range(3.0, 5.0);
-            let camera = if k % 2 == 1 {
-                ortho(eye, DVec3::ZERO, 4.0)
-            } else {
-                persp(eye, DVec3::ZERO)
-            };
+        for camera in views_around_origin(&mut rng, -0.2, (3.0, 5.0), 4.0) {
             assert_oracle(scene, &camera, 300, 300);
         }
     }
