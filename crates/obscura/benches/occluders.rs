@@ -71,12 +71,14 @@ fn measure(
     let same = plain.ids == culled.ids && plain.depth == culled.depth;
     let s = &culling.stats;
     println!(
-        "{name}: cull {cull_ms:.3} ms ({} occluders; objects {}/{} culled, clusters {}/{}, faces {}/{}); z-buffer {plain_ms:.2} ms; cull + z-buffer {both_ms:.2} ms ({:.2}x){}",
+        "{name}: cull {cull_ms:.3} ms ({} occluders; objects {}/{} culled ({} by occluders), clusters {}/{} ({} by occluders), faces {}/{}); z-buffer {plain_ms:.2} ms; cull + z-buffer {both_ms:.2} ms ({:.2}x){}",
         culling.occluders.len(),
         s.objects_culled,
         s.objects_tested,
+        s.objects_by_reason.occluder,
         s.clusters_culled,
         s.clusters_tested,
+        s.clusters_by_reason.occluder,
         s.faces_culled,
         s.faces_tested,
         plain_ms / both_ms,
