@@ -8,7 +8,7 @@
 //!
 //! | part | module |
 //! | --- | --- |
-//! | candidates (large convex planar faces, coplanar triangle pairs), once per scene; the metric and its sign | [`select`] |
+//! | candidates (large convex planar faces, coplanar triangle pairs), once per scene; the metric and its sign | [`select`](mod@select) |
 //! | the shadow volume of one convex occluder, box inside / outside / straddling, margins | [`shadow`] |
 //! | the binary hierarchy over the clusters' boxes, once per scene, and its walk | [`walk`] |
 //!
