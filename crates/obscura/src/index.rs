@@ -214,6 +214,8 @@ pub struct SceneIndex<'s> {
     bsp: Keyed<BspOptions, BspTree>,
     octrees: Keyed<(u32, u64), Octree>,
     clusters: OnceLock<crate::cull::clusters::Clusters>,
+    occluder_candidates: OnceLock<crate::cull::occluders::select::OccluderCandidates>,
+    cluster_bvh: OnceLock<crate::cull::occluders::walk::ClusterBvh>,
     counters: Counters,
 }
 
@@ -241,6 +243,8 @@ impl<'s> SceneIndex<'s> {
             bsp: Keyed::default(),
             octrees: Keyed::default(),
             clusters: OnceLock::new(),
+            occluder_candidates: OnceLock::new(),
+            cluster_bvh: OnceLock::new(),
             counters: Counters::default(),
         }
     }
@@ -296,6 +300,21 @@ impl<'s> SceneIndex<'s> {
     pub fn clusters(&self) -> &crate::cull::clusters::Clusters {
         self.clusters
             .get_or_init(|| crate::cull::clusters::Clusters::new(self.scene))
+    }
+
+    /// The scene's candidate occluders: large convex planar faces and coplanar
+    /// triangle pairs, largest first (built once; ranked per view by the occluder
+    /// method, [`crate::cull::occluders`]).
+    pub fn occluder_candidates(&self) -> &crate::cull::occluders::select::OccluderCandidates {
+        self.occluder_candidates
+            .get_or_init(|| crate::cull::occluders::select::OccluderCandidates::new(self.scene))
+    }
+
+    /// A binary hierarchy over the boxes of [`Self::clusters`], walked against the
+    /// occluders' shadow volumes (built once).
+    pub fn cluster_bvh(&self) -> &crate::cull::occluders::walk::ClusterBvh {
+        self.cluster_bvh
+            .get_or_init(|| crate::cull::occluders::walk::ClusterBvh::new(self.clusters()))
     }
 
     /// Decides what one view cannot see ([`crate::cull::occlusion::cull`]).

@@ -9,6 +9,7 @@ mod budget;
 mod cross_validation;
 mod depth_sort;
 mod hsr_scenes;
+mod occluders;
 mod octree;
 mod raycast;
 mod scanline;
