@@ -180,7 +180,7 @@ pub fn parse_walk(
         let mut camera = Camera {
             eye,
             target,
-            ..base.clone()
+            ..*base
         };
         if with_fov {
             if !(v[6] > 0.0 && v[6] < 180.0) {
@@ -264,7 +264,7 @@ pub fn run(args: &CullArgs) -> Result<()> {
             let fit = (args.view.near.is_none() && args.view.far.is_none()).then(|| scene.bounds());
             let base = Camera {
                 up: args.view.up.unwrap_or_else(|| scene.up()),
-                ..camera.clone()
+                ..camera
             };
             read_walk(path, &base, fit.as_ref())?
         }

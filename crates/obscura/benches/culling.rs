@@ -14,8 +14,8 @@
 //!
 //! Each time is the best of `RUNS` (default 5) after one warm-up; the index (and its
 //! clusters) is built before timing, as a viewer builds it once. "cull" is the
-//! culling stage ([`obscura::cull::occlusion::CullStats::total_ms`]); "total" is cull
-//! + view + z-buffer, measured around [`SceneIndex::render_culled`]. Every run checks
+//! culling stage ([`obscura::cull::occlusion::CullStats::total_ms`]); "total" is the
+//! cull, the view and the z-buffer, measured around [`SceneIndex::render_culled`]. Every run checks
 //! that the culled frame equals the plain one (ids), so a figure never comes from a
 //! wrong picture.
 

@@ -249,17 +249,32 @@ fn reason_allowed(method: CullMethod, r: CullReason, occluders: usize) -> bool {
 
 /// Checks one culling run against the z-buffer of the whole scene (`truth`), then the
 /// picture of the culled view against it; adds to `eff`. Panics naming the view.
-fn check_view(
-    index: &SceneIndex<'_>,
-    camera: &Camera,
+/// One view and its ground truth.
+#[derive(Clone, Copy)]
+struct Viewed<'a, 's> {
+    index: &'a SceneIndex<'s>,
+    camera: &'a Camera,
     vp: Viewport,
-    truth: &Frame,
-    polygons: &(Vec<u32>, Vec<usize>),
+    /// The whole scene's z-buffer.
+    truth: &'a Frame,
+    /// [`polygon_faces`] of the scene.
+    polygons: &'a (Vec<u32>, Vec<usize>),
+}
+
+fn check_view(
+    v: &Viewed<'_, '_>,
     culling: &Culling,
     algorithms: &[Algorithm],
     what: &str,
     eff: &mut Effectiveness,
 ) {
+    let Viewed {
+        index,
+        camera,
+        vp,
+        truth,
+        polygons,
+    } = *v;
     let scene = index.scene();
     let (faces, objects) = polygons;
     let n_objects = scene.objects().len();
@@ -388,11 +403,13 @@ fn harness(
                     .cull(&camera, vp, &CullOptions::with_method(method))
                     .unwrap_or_else(|e| panic!("{what}: {e}"));
                 check_view(
-                    &index,
-                    &camera,
-                    vp,
-                    &truth,
-                    &polygons,
+                    &Viewed {
+                        index: &index,
+                        camera: &camera,
+                        vp,
+                        truth: &truth,
+                        polygons: &polygons,
+                    },
                     &culling,
                     algorithms,
                     &what,
@@ -434,11 +451,11 @@ fn assert_floors(results: &[(String, CullMethod, Effectiveness)]) {
     }
 }
 
-/// The CI run: 24 views per scene at 160x90 with the z-buffer, the first 2 with every
+/// The CI run: 20 views per scene at 160x90 with the z-buffer, the first with every
 /// algorithm.
 #[test]
 fn every_method_is_conservative_on_random_views() {
-    let results = harness(24, Viewport::new(160, 90).unwrap(), 2);
+    let results = harness(20, Viewport::new(160, 90).unwrap(), 1);
     assert_floors(&results);
     // The frustum culls something somewhere (the harness would pass vacuously if every
     // view saw the whole scene).
@@ -480,11 +497,13 @@ fn every_method_is_conservative_in_the_full_city() {
                 .unwrap();
             let what = format!("city view {v} {method:?}");
             check_view(
-                &index,
-                &camera,
-                vp,
-                &truth,
-                &polygons,
+                &Viewed {
+                    index: &index,
+                    camera: &camera,
+                    vp,
+                    truth: &truth,
+                    polygons: &polygons,
+                },
                 &culling,
                 &[Algorithm::ZBuffer],
                 &what,
@@ -524,11 +543,13 @@ fn the_harness_catches_a_visible_face_culled() {
     }
     culling.finish(&index);
     check_view(
-        &index,
-        &camera,
-        vp,
-        &truth,
-        &polygon_faces(&scene),
+        &Viewed {
+            index: &index,
+            camera: &camera,
+            vp,
+            truth: &truth,
+            polygons: &polygon_faces(&scene),
+        },
         &culling,
         &[Algorithm::ZBuffer],
         "everything culled",
