@@ -515,7 +515,7 @@ fn frame_report(fi: usize, frame: &Frame0, rows: &[Culling], detail: bool) -> St
     );
     let _ = writeln!(
         s,
-        "  {:<15} {:>26} {:>26} {:>32} {:>9}",
+        "  {:<15} {:>28} {:>29} {:>27} {:>9}",
         "method",
         "objects tested/culled/drawn",
         "clusters tested/culled/drawn",
@@ -527,7 +527,7 @@ fn frame_report(fi: usize, frame: &Frame0, rows: &[Culling], detail: bool) -> St
         let triple = |a: u64, b: u64| format!("{a}/{b}/{}", a - b.min(a));
         let _ = writeln!(
             s,
-            "  {:<15} {:>26} {:>26} {:>32} {:>9.3}",
+            "  {:<15} {:>28} {:>29} {:>27} {:>9.3}",
             c.method.name(),
             triple(st.objects_tested, st.objects_culled),
             triple(st.clusters_tested, st.clusters_culled),
@@ -923,6 +923,56 @@ mod tests {
             let e = parse_walk(p, text, &base(), None).unwrap_err().to_string();
             assert!(e.contains(want), "{text:?}: {e}");
         }
+    }
+
+    /// The explain picture colours a culled object by its reason where it lies, and
+    /// keeps the kept ones grey: a cube culled (on purpose, against the rule) by the
+    /// buffer shows magenta through the floor's picture.
+    #[test]
+    fn explain_colours_culled_objects_by_reason() {
+        let scene = obscura::scene::demo::default_scene();
+        let index = SceneIndex::new(&scene);
+        let vp = Viewport::new(96, 64).unwrap();
+        let camera = scene.default_camera(vp.aspect());
+        let prep = obscura::PrepareOptions::default();
+        let mut c = index
+            .cull(&camera, vp, &CullOptions::with_method(CullMethod::Frustum))
+            .unwrap();
+        let cube = scene
+            .objects()
+            .iter()
+            .position(|o| o.name == "cube")
+            .unwrap();
+        let img = explain_image(&index, &camera, vp, &prep, &c).unwrap();
+        // Magenta (the buffer's colour), pure or blended over grey.
+        let count = |img: &RgbImage| {
+            img.pixels
+                .iter()
+                .filter(|p| {
+                    let [r, g, b] = p.map(i32::from);
+                    r > g + 40 && b > g + 40
+                })
+                .count()
+        };
+        // The legend's swatch alone.
+        let legend = 5 * 5;
+        assert_eq!((img.width, img.height), (96, 64));
+        assert_eq!(count(&img), legend);
+        c.cull_object(cube, CullReason::Buffer);
+        c.finish(&index);
+        let img = explain_image(&index, &camera, vp, &prep, &c).unwrap();
+        assert!(count(&img) > legend, "{}", count(&img));
+        // With the buffer's depths the picture doubles its width.
+        c.buffer_image = Some(BufferImage {
+            width: 4,
+            height: 2,
+            depth: vec![1.0, 2.0, f32::INFINITY, 3.0, 1.0, 1.0, 1.0, 1.0],
+        });
+        let img = explain_image(&index, &camera, vp, &prep, &c).unwrap();
+        assert_eq!((img.width, img.height), (192, 64));
+        // Uncovered buffer pixels are black, the nearest white-ish.
+        assert_eq!(img.pixels[96 + 2 * 24 + 1], [0, 0, 0]);
+        assert_eq!(img.pixels[96 + 1], [235, 235, 235]);
     }
 
     #[test]

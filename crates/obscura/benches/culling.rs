@@ -3,7 +3,7 @@
 //!
 //! `cargo bench -p obscura --bench culling` (plain timing, not criterion: a table the
 //! issue's closing note quotes). Two scenes:
-//! - the city demo (10,000 boxes, 120,001 faces) from street level, three views down
+//! - the city demo (10,000 boxes, 60,001 faces) from street level, three views down
 //!   and across its streets; target: cull + z-buffer at least 3x faster than the
 //!   z-buffer alone for the best method;
 //! - Sponza's atrium view (`$SPONZA`, default `../shared/data/sponza.obj` beside the

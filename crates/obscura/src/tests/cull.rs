@@ -394,6 +394,7 @@ fn harness(
             } else {
                 &[Algorithm::ZBuffer]
             };
+            let mut frustum: Option<Culling> = None;
             for (m, method) in CullMethod::ALL.into_iter().enumerate() {
                 let what = format!(
                     "{} view {v} (eye {:?}, target {:?}) {method:?}",
@@ -415,6 +416,19 @@ fn harness(
                     &what,
                     &mut eff[m],
                 );
+                // Every method runs the frustum stage first: it culls at least that.
+                match (method, &frustum) {
+                    (CullMethod::Frustum, _) => frustum = Some(culling),
+                    (CullMethod::None, _) | (_, None) => {}
+                    (_, Some(f)) => {
+                        for (k, r) in f.objects.iter().enumerate() {
+                            assert!(
+                                r.is_none() || culling.objects[k].is_some(),
+                                "{what}: object {k} outside the frustum kept"
+                            );
+                        }
+                    }
+                }
             }
         }
         for (m, method) in CullMethod::ALL.into_iter().enumerate() {
