@@ -491,7 +491,7 @@ fn every_method_is_conservative_on_hundreds_of_views() {
 
 /// The full city (10,000 boxes) from street level, as the benchmark sees it.
 #[test]
-#[ignore = "the 120,000-face city: slow in debug, a minute in release"]
+#[ignore = "the 60,001-face city, 40 views: a minute in release"]
 fn every_method_is_conservative_in_the_full_city() {
     let scene = demo::city(100, 100, 7);
     let index = SceneIndex::new(&scene);
