@@ -8,7 +8,8 @@
 //! parses, and whose paths all stay inside a private folder the process works in, has
 //! its outputs checked (`Outputs::stage`, which creates and removes the temporary files
 //! beside them). A `render` or `compare` of a small scene of that folder at a small size
-//! (at most 64x64 pixels, 1 or 2 threads, octree depth 8) is then run whole; every fixed
+//! (at most 64x64 pixels, 1 or 2 threads, octree depth 8), and a `cull` or `export` of
+//! such a scene, is then run whole; every fixed
 //! file of the folder must be unchanged afterwards: an output that replaced an input is
 //! saved as a soft finding (`findings/soft/cli_args-overwrote-*`) and the folder is
 //! restored.
@@ -23,6 +24,10 @@ mod cli;
 mod common;
 #[path = "../../crates/obscura-cli/src/compare.rs"]
 mod compare;
+#[path = "../../crates/obscura-cli/src/cull.rs"]
+mod cull;
+#[path = "../../crates/obscura-cli/src/export.rs"]
+mod export;
 #[path = "../../crates/obscura-cli/src/grid.rs"]
 mod grid;
 #[path = "../../crates/obscura-cli/src/lines.rs"]
@@ -193,8 +198,27 @@ fuzz_target!(|data: &[u8]| {
             ],
             a.naming,
         ),
+        Command::Cull(a) => (
+            a.view.scene.as_deref(),
+            vec![
+                ("--stats-json", a.stats_json.as_deref()),
+                ("--kept", a.kept.as_deref()),
+                ("--explain", a.explain.as_deref()),
+            ],
+            a.naming,
+        ),
+        Command::Export(a) => (
+            a.view.scene.as_deref(),
+            vec![("-o", Some(a.output.as_path()))],
+            a.naming,
+        ),
     };
-    let paths_inside = outs.iter().all(|(_, p)| p.is_none_or(inside))
+    let walk_inside = match &cli.command {
+        Command::Cull(a) => a.walk.as_deref().is_none_or(inside),
+        _ => true,
+    };
+    let paths_inside = walk_inside
+        && outs.iter().all(|(_, p)| p.is_none_or(inside))
         && scene.is_none_or(|s| s.starts_with("demo:") || inside(Path::new(s)));
     if !paths_inside {
         return;
@@ -208,6 +232,10 @@ fuzz_target!(|data: &[u8]| {
         Command::Compare(mut a) => {
             let depth = a.tuning.octree_depth;
             small_view(&mut a.view, depth).then(|| compare::run(&a).map_err(|e| e.to_string()))
+        }
+        Command::Cull(mut a) => small_view(&mut a.view, 0).then(|| cull::run(&a).map_err(|e| e.to_string())),
+        Command::Export(mut a) => {
+            small_view(&mut a.view, 0).then(|| export::run(&a).map_err(|e| e.to_string()))
         }
         Command::Bench(_) | Command::Lines(_) => None,
     };

@@ -8,10 +8,10 @@ use clap::Args;
 use obscura::bench_support::scaled_triangles;
 use obscura::scene::{MeshBuilder, ObjectDesc};
 use obscura::surface::Algorithm;
-use obscura::{Result, Scene, SceneIndex, prepare};
+use obscura::{Result, Scene, SceneIndex};
 use serde_json::json;
 
-use crate::common::{AlgoArgs, ViewArgs};
+use crate::common::{AlgoArgs, CullArgs, ViewArgs};
 use crate::out::{errln, out, outln};
 use crate::outputs::{OutputArgs, Outputs};
 
@@ -41,6 +41,8 @@ pub struct BenchArgs {
     pub budget: f64,
     #[command(flatten)]
     pub tuning: AlgoArgs,
+    #[command(flatten)]
+    pub culling: CullArgs,
     /// Also write the results as JSON.
     #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
@@ -207,12 +209,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     };
     outln!(
-        "sweep over {} ({} threads); times in ms of prepare + render (each scene structure built once per size, by its first user); sizes predicted to exceed {} s are skipped",
+        "sweep over {} ({} threads); times in ms of cull ({}) + prepare + render (each scene structure built once per size, by its first user); sizes predicted to exceed {} s are skipped",
         base.as_ref()
             .map_or("generated scaled triangles", |l| l.spec.as_str()),
         args.view
             .threads
             .map_or_else(|| "all".to_string(), |t| t.to_string()),
+        args.culling.cull.name(),
         crate::common::readable(args.budget)
     );
     let mut results: Vec<(Algorithm, Vec<(usize, f64)>)> =
@@ -247,6 +250,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         let viewport = args.view.viewport_or(&scene, (640, 360))?;
         let camera = args.view.camera(&scene, viewport)?;
         let prep = args.view.prepare_options();
+        let cull = args.culling.options();
         // One index per scene, shared by every algorithm and repetition: each structure
         // (triangles, BVH, grid, BSP tree, octree) is built by the first run that needs
         // it (a run under 200 ms is repeated and its best kept: the traversal's time).
@@ -258,7 +262,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             let measure = || {
                 args.view.with_threads(|| {
                     let start = Instant::now();
-                    let view = prepare(&scene, &camera, viewport, &prep)?;
+                    let view = index
+                        .view_culled(&camera, viewport, &prep, &cull)?
+                        .into_prepared();
                     index.render(&view, *algorithm, &options)?;
                     Ok::<f64, obscura::Error>(start.elapsed().as_secs_f64() * 1e3)
                 })?

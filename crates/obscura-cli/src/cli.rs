@@ -4,7 +4,7 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::{bench, compare, lines, render};
+use crate::{bench, compare, cull, export, lines, render};
 
 /// What can be seen? Clipping, culling and hidden-surface removal, every classical
 /// algorithm behind one interface.
@@ -31,4 +31,12 @@ pub enum Command {
     /// people and pen plotters, with a PNG preview and the JSON of every edge.
     #[command(after_help = lines::EXAMPLES)]
     Lines(lines::LinesArgs),
+    /// What each occlusion-culling method removes from a view or a camera walk, and
+    /// why: objects, clusters and faces tested, culled and drawn, the time of each
+    /// stage; the surviving face ids, and a picture of the decisions.
+    #[command(after_help = cull::EXAMPLES)]
+    Cull(cull::CullArgs),
+    /// Write a scene (a file, a scene file or a demo) as OBJ with its faces in id order.
+    #[command(after_help = export::EXAMPLES)]
+    Export(export::ExportArgs),
 }

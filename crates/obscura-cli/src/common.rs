@@ -8,6 +8,7 @@ use clap::builder::TypedValueParser;
 use glam::DVec3;
 use obscura::accel::bsp::{BspOptions, BspTraversal};
 use obscura::cull::backface::BackfaceMode;
+use obscura::cull::occlusion::{CullMethod, CullOptions};
 use obscura::geom::BoundsKind;
 use obscura::surface::{Algorithm, RenderOptions};
 use obscura::{Camera, Error, PrepareOptions, Projection, Result, Scene, Viewport};
@@ -221,6 +222,38 @@ pub fn parse_algo(s: &str) -> std::result::Result<Algorithm, String> {
             "unknown algorithm \"{}\" (known: {})",
             s.trim(),
             Algorithm::ALL.map(Algorithm::name).join(", ")
+        )
+    })
+}
+
+/// The occlusion-culling stage of a view (`--cull`), for `render`, `compare` and
+/// `bench`.
+#[derive(Args, Debug, Clone)]
+pub struct CullArgs {
+    /// Culling stage before the hidden-surface algorithm: none, frustum (objects and
+    /// clusters outside the view), portals (cells and portals with a PVS),
+    /// screen-portals (Luebke-Georges), occluders (Coorg-Teller shadow volumes) or
+    /// buffer (an occlusion buffer). Every method is conservative: the picture is the
+    /// same, only faster (see docs/culling.md).
+    #[arg(long = "cull", value_name = "METHOD", default_value = "frustum",
+          value_parser = parse_cull)]
+    pub cull: CullMethod,
+}
+
+impl CullArgs {
+    /// The library's options for this method.
+    pub fn options(&self) -> CullOptions {
+        CullOptions::with_method(self.cull)
+    }
+}
+
+/// A culling method's name (`--cull`, `--method`).
+pub fn parse_cull(s: &str) -> std::result::Result<CullMethod, String> {
+    CullMethod::from_name(s.trim()).ok_or_else(|| {
+        format!(
+            "unknown culling method \"{}\" (known: {})",
+            s.trim(),
+            CullMethod::ALL.map(CullMethod::name).join(", ")
         )
     })
 }

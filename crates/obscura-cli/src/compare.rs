@@ -7,10 +7,10 @@ use clap::Args;
 use obscura::SceneIndex;
 use obscura::frame::{available_memory, check_frames_fit};
 use obscura::surface::{Algorithm, Stats};
-use obscura::{Frame, Result, RgbImage, Viewport, prepare};
+use obscura::{Frame, Result, RgbImage, Viewport};
 use serde_json::json;
 
-use crate::common::{AlgoArgs, ViewArgs, progress_bar};
+use crate::common::{AlgoArgs, CullArgs, ViewArgs, progress_bar};
 use crate::grid;
 use crate::out::out;
 use crate::outputs::{OutputArgs, Outputs};
@@ -30,6 +30,8 @@ pub struct CompareArgs {
     pub algos: Option<Vec<Algorithm>>,
     #[command(flatten)]
     pub tuning: AlgoArgs,
+    #[command(flatten)]
+    pub culling: CullArgs,
     /// The grid image (PNG): each algorithm's picture and its difference mask.
     #[arg(
         short = 'o',
@@ -145,10 +147,13 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     }
 
     let rows = args.view.with_threads(|| {
-        let view = prepare(scene, &camera, viewport, &prep)?;
         // One index for all algorithms: the triangles, the BVH (and the grid, the BSP
         // tree, the octree) are built once and shared by the algorithms that use them.
+        // The culling stage (`--cull`) runs once: every algorithm gets the same view.
         let index = SceneIndex::new(scene);
+        let view = index
+            .view_culled(&camera, viewport, &prep, &args.culling.options())?
+            .into_prepared();
         let mut rows = Vec::new();
         // One time limit for the run: the cheap algorithms first, so that on a heavy
         // scene the costly ones are the ones skipped for the time left.

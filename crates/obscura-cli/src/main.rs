@@ -5,6 +5,8 @@ mod bench;
 mod cli;
 mod common;
 mod compare;
+mod cull;
+mod export;
 mod grid;
 mod lines;
 mod out;
@@ -32,6 +34,8 @@ fn main() -> ExitCode {
         Command::Compare(args) => compare::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Lines(args) => lines::run(&args),
+        Command::Cull(args) => cull::run(&args),
+        Command::Export(args) => export::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,10 +6,10 @@ use std::time::Instant;
 
 use clap::Args;
 use obscura::surface::Algorithm;
-use obscura::{Result, SceneIndex, prepare};
+use obscura::{Result, SceneIndex};
 use serde_json::json;
 
-use crate::common::{AlgoArgs, ViewArgs};
+use crate::common::{AlgoArgs, CullArgs, ViewArgs};
 use crate::errln;
 use crate::out::outln;
 use crate::outputs::{OutputArgs, Outputs};
@@ -42,6 +42,8 @@ pub struct RenderArgs {
     pub algo: Algorithm,
     #[command(flatten)]
     pub tuning: AlgoArgs,
+    #[command(flatten)]
+    pub culling: CullArgs,
     /// The PNG to write.
     #[arg(
         short = 'o',
@@ -105,21 +107,37 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 
     let rendered = args.view.with_threads(|| {
         let start = Instant::now();
-        let view = prepare(scene, &camera, viewport, &prep)?;
-        let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
         // The scene's structures through its index, as `compare` and `bench` take them
-        // (one render here, so each is built once either way).
+        // (one render here, so each is built once either way); the culling stage
+        // (`--cull`) decides what the view leaves out before its vertices are
+        // transformed.
         let index = SceneIndex::new(scene);
+        let view = index.view_culled(&camera, viewport, &prep, &args.culling.options())?;
+        let culling = view.culling().cloned();
+        let view = view.into_prepared();
+        let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
         let (frame, stats) = index
             .render(&view, args.algo, &options)
             .map_err(|e| e.in_input(&loaded.spec))?;
         let render_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok::<_, obscura::Error>((view.stats().clone(), frame, stats, render_ms, prepare_ms))
+        Ok::<_, obscura::Error>((
+            view.stats().clone(),
+            frame,
+            stats,
+            render_ms,
+            prepare_ms,
+            culling,
+        ))
     })?;
     if let Some((bar, _)) = &bar {
         bar.finish_and_clear();
     }
-    let (stages, frame, stats, render_ms, prepare_ms) = rendered?;
+    let (stages, frame, stats, render_ms, prepare_ms, culling) = rendered?;
+    if let Some(c) = &culling {
+        for n in &c.notes {
+            errln!("note: culling: {n}");
+        }
+    }
     if let Some(note) = crate::common::grid_note(&stats) {
         errln!("note: {note}");
     }
@@ -139,6 +157,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let doc = json!({
             "scene": loaded.spec,
             "algorithm": args.algo.name(),
+            "cull": args.culling.cull.name(),
+            "culling": culling.as_ref().map(|c| &c.stats),
             "width": viewport.width,
             "height": viewport.height,
             "threads": if threads == 0 { rayon::current_num_threads() } else { threads },
@@ -178,6 +198,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "out",
             "ms"
         );
+        if let Some(c) = &culling {
+            crate::cull::print_stage_rows(c);
+        }
         for s in &stages.stages {
             outln!(
                 "{:<48} {:>9} {:>12} {:>12} {:>9.2}",

@@ -80,7 +80,7 @@ use crate::budget::MemoryBudget;
 use crate::lines::edges::IntersectionSegment;
 use crate::scene::{EdgeAdjacency, Scene};
 use crate::surface::{self, Algorithm, RenderOptions, Stats};
-use crate::view::{PreparedView, View};
+use crate::view::{PrepareOptions, PreparedView, View};
 use crate::{Error, Frame, Result};
 
 /// The most structures of one kind (grids, BSP trees, octrees) an index keeps for
@@ -447,6 +447,71 @@ impl<'s> SceneIndex<'s> {
         surface::render_view_indexed(self, algorithm, view, options)
     }
 
+    /// A view with the culling stage: [`Self::cull`] decides what the camera cannot see,
+    /// then [`View::new_culled`] leaves it out (its vertices are never transformed, its
+    /// faces reach no algorithm). The decisions stay on the view ([`View::culling`]).
+    /// With [`crate::cull::occlusion::CullMethod::None`] nothing is culled beyond the
+    /// view's own frustum test of objects, as [`View::new`].
+    ///
+    /// # Errors
+    /// As [`Self::cull`] and [`View::new_culled`].
+    pub fn view_culled(
+        &self,
+        camera: &crate::Camera,
+        viewport: crate::Viewport,
+        prepare: &PrepareOptions,
+        cull: &crate::cull::occlusion::CullOptions,
+    ) -> Result<View<'s>> {
+        let culling = self.cull(camera, viewport, cull)?;
+        View::new_culled(self.scene, camera, viewport, prepare, culling)
+    }
+
+    /// Renders one view of this index's scene with the culling stage and an algorithm:
+    /// [`Self::view_culled`], then [`Self::render_view`]. Returns the frame, the
+    /// algorithm's stats and the culling decisions (what was culled and why, counts and
+    /// stage times). Every method is conservative, so the frame equals the one
+    /// [`View::new`] gives, pixel for pixel.
+    ///
+    /// ```
+    /// use obscura::cull::occlusion::{CullMethod, CullOptions};
+    /// use obscura::{Algorithm, PrepareOptions, RenderOptions, SceneIndex, Viewport};
+    /// let scene = obscura::Scene::demo("city")?;
+    /// let index = SceneIndex::new(&scene);
+    /// let vp = Viewport::new(64, 36)?;
+    /// let camera = scene.default_camera(vp.aspect());
+    /// let (frame, _, culling) = index.render_culled(
+    ///     &camera,
+    ///     vp,
+    ///     &PrepareOptions::default(),
+    ///     &CullOptions::with_method(CullMethod::Frustum),
+    ///     Algorithm::ZBuffer,
+    ///     &RenderOptions::default(),
+    /// )?;
+    /// assert_eq!(culling.faces.len(), scene.objects().iter().map(|o| o.mesh.polygon_count()).sum::<usize>());
+    /// assert!(frame.covered_pixels() > 0);
+    /// # Ok::<(), obscura::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Self::view_culled`] and [`Self::render_view`].
+    pub fn render_culled(
+        &self,
+        camera: &crate::Camera,
+        viewport: crate::Viewport,
+        prepare: &PrepareOptions,
+        cull: &crate::cull::occlusion::CullOptions,
+        algorithm: Algorithm,
+        options: &RenderOptions,
+    ) -> Result<(Frame, Stats, crate::cull::occlusion::Culling)> {
+        let view = self.view_culled(camera, viewport, prepare, cull)?;
+        let culling = view
+            .culling()
+            .cloned()
+            .expect("a view made with a culling run keeps it");
+        let (frame, stats) = self.render_view(&view, algorithm, options)?;
+        Ok((frame, stats, culling))
+    }
+
     fn check_scene(&self, view: &View<'_>) -> Result<()> {
         if std::ptr::eq(view.scene(), self.scene) {
             Ok(())
@@ -466,7 +531,6 @@ mod tests {
     /// No time limit.
     const NO_LIMIT: crate::work::Deadline = crate::work::Deadline::NONE;
     use crate::scene::{Camera, Viewport, demo};
-    use crate::view::PrepareOptions;
     use glam::DVec3;
 
     fn views(scene: &Scene) -> Vec<View<'_>> {
