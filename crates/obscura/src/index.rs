@@ -214,6 +214,7 @@ pub struct SceneIndex<'s> {
     bsp: Keyed<BspOptions, BspTree>,
     octrees: Keyed<(u32, u64), Octree>,
     clusters: OnceLock<crate::cull::clusters::Clusters>,
+    pvs: OnceLock<Option<crate::cull::portals::Pvs>>,
     counters: Counters,
 }
 
@@ -241,6 +242,7 @@ impl<'s> SceneIndex<'s> {
             bsp: Keyed::default(),
             octrees: Keyed::default(),
             clusters: OnceLock::new(),
+            pvs: OnceLock::new(),
             counters: Counters::default(),
         }
     }
@@ -296,6 +298,24 @@ impl<'s> SceneIndex<'s> {
     pub fn clusters(&self) -> &crate::cull::clusters::Clusters {
         self.clusters
             .get_or_init(|| crate::cull::clusters::Clusters::new(self.scene))
+    }
+
+    /// The PVS table of the scene's cells ([`crate::cull::portals::pvs::compute`] with
+    /// the default options: no time limit, a budget of portal sequences per cell), built
+    /// once; `None` for a scene without cells.
+    pub fn pvs(&self) -> Option<&crate::cull::portals::Pvs> {
+        self.pvs
+            .get_or_init(|| {
+                let graph = self.scene.cells()?;
+                // Without a deadline the computation cannot fail.
+                crate::cull::portals::pvs::compute(
+                    graph,
+                    &crate::cull::portals::PvsOptions::default(),
+                    &|_, _| {},
+                )
+                .ok()
+            })
+            .as_ref()
     }
 
     /// Decides what one view cannot see ([`crate::cull::occlusion::cull`]).
