@@ -10,6 +10,7 @@ mod cross_validation;
 mod depth_sort;
 mod hsr_scenes;
 mod octree;
+mod portals;
 mod raycast;
 mod scanline;
 mod warnock;

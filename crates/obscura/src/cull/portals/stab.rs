@@ -151,6 +151,7 @@ pub fn stab_tree(
             format!("cell {source} does not exist ({} cells)", graph.cells.len()),
         ));
     }
+    deadline.check("PVS precomputation (stab trees)")?;
     let mut w = Walk {
         graph,
         adjacency,
