@@ -35,8 +35,11 @@ fn grid(n: usize, seed: u64) -> CellGraph {
     for j in 0..n {
         for i in 0..n {
             let lo = DVec3::new(4.0 * i as f64, 0.0, 4.0 * j as f64);
-            g.cells
-                .push(box_cell(format!("{i},{j}"), lo, lo + DVec3::new(4.0, 3.0, 4.0)));
+            g.cells.push(box_cell(
+                format!("{i},{j}"),
+                lo,
+                lo + DVec3::new(4.0, 3.0, 4.0),
+            ));
         }
     }
     for j in 0..n {

@@ -119,14 +119,31 @@ fn slabs(scene: &mut Scene, x1: f64, z1: f64) {
 
 /// Puts `n` random boxes in a room (kept clear of its walls) and lists them in the
 /// cell.
-fn furnish(scene: &mut Scene, cell: &mut Cell, min: DVec3, max: DVec3, n: usize, rng: &mut SplitMix64) {
+fn furnish(
+    scene: &mut Scene,
+    cell: &mut Cell,
+    min: DVec3,
+    max: DVec3,
+    n: usize,
+    rng: &mut SplitMix64,
+) {
     for _ in 0..n {
-        let s = DVec3::new(rng.range(0.2, 0.7), rng.range(0.2, 1.6), rng.range(0.2, 0.7));
+        let s = DVec3::new(
+            rng.range(0.2, 0.7),
+            rng.range(0.2, 1.6),
+            rng.range(0.2, 0.7),
+        );
         let x = rng.range(min.x + 0.1, max.x - 0.1 - s.x);
         let z = rng.range(min.z + 0.1, max.z - 0.1 - s.z);
         let y = rng.range(0.0, 1.0);
         let c = [rng.next_f64() as f32, 0.6, rng.next_f64() as f32];
-        let k = add_box(scene, "thing", DVec3::new(x, y, z), DVec3::new(x, y, z) + s, c);
+        let k = add_box(
+            scene,
+            "thing",
+            DVec3::new(x, y, z),
+            DVec3::new(x, y, z) + s,
+            c,
+        );
         cell.objects.push(k);
     }
 }
@@ -143,7 +160,12 @@ fn five_cells(furnished: usize) -> Scene {
     const E: u32 = 4;
     let mut scene = Scene::new();
     let mut rng = SplitMix64(5);
-    let room = |i: f64| (DVec3::new(4.0 * i, 0.0, 0.0), DVec3::new(4.0 * i + 4.0, H, 4.0));
+    let room = |i: f64| {
+        (
+            DVec3::new(4.0 * i, 0.0, 0.0),
+            DVec3::new(4.0 * i + 4.0, H, 4.0),
+        )
+    };
     // Room order along x: A D E C B.
     let order = [(A, "A"), (D, "D"), (E, "E"), (C, "C"), (B, "B")];
     let mut cells: Vec<Cell> = vec![box_cell("", DVec3::ZERO, DVec3::ONE); 5];
@@ -165,7 +187,14 @@ fn five_cells(furnished: usize) -> Scene {
     }
     for (i, &(id, _)) in order.iter().enumerate() {
         let (lo, hi) = room(i as f64);
-        furnish(&mut scene, &mut cells[id as usize], lo, hi, furnished, &mut rng);
+        furnish(
+            &mut scene,
+            &mut cells[id as usize],
+            lo,
+            hi,
+            furnished,
+            &mut rng,
+        );
     }
     if furnished > 0 {
         // A bench through the door between A and D, in both cells.
@@ -193,7 +222,11 @@ fn grid_level(nx: usize, nz: usize, furnished: usize, seed: u64) -> Scene {
     for j in 0..nz {
         for i in 0..nx {
             let lo = DVec3::new(4.0 * i as f64, 0.0, 4.0 * j as f64);
-            cells.push(box_cell(&format!("{i},{j}"), lo, lo + DVec3::new(4.0, H, 4.0)));
+            cells.push(box_cell(
+                &format!("{i},{j}"),
+                lo,
+                lo + DVec3::new(4.0, H, 4.0),
+            ));
         }
     }
     let (xmax, zmax) = (4.0 * nx as f64, 4.0 * nz as f64);
@@ -228,7 +261,14 @@ fn grid_level(nx: usize, nz: usize, furnished: usize, seed: u64) -> Scene {
         for i in 0..nx {
             let lo = DVec3::new(4.0 * i as f64, 0.0, 4.0 * j as f64);
             let c = &mut cells[id(i, j) as usize];
-            furnish(&mut scene, c, lo, lo + DVec3::new(4.0, H, 4.0), furnished, &mut rng);
+            furnish(
+                &mut scene,
+                c,
+                lo,
+                lo + DVec3::new(4.0, H, 4.0),
+                furnished,
+                &mut rng,
+            );
         }
     }
     scene.set_cells(Some(Arc::new(CellGraph { cells, portals })));
@@ -269,7 +309,10 @@ fn seed_portal_walk_from_e_goes_to_d_then_a_and_stops() {
     );
     let t = ViewTransform::new(&camera, Viewport::new(160, 90).unwrap());
     let walk = portal_walk(graph, camera.eye, &view_frustum(&t));
-    let cells: Vec<&str> = walk.iter().map(|v| graph.cells[v.cell as usize].name.as_str()).collect();
+    let cells: Vec<&str> = walk
+        .iter()
+        .map(|v| graph.cells[v.cell as usize].name.as_str())
+        .collect();
     assert_eq!(cells, ["E", "D", "A"]);
     assert_eq!(walk[0].portal, None);
     assert_eq!(walk[1].parent, Some(0));
@@ -291,7 +334,10 @@ fn seed_portal_walk_from_e_goes_to_d_then_a_and_stops() {
     );
     let t = ViewTransform::new(&back, Viewport::new(160, 90).unwrap());
     let walk = portal_walk(graph, back.eye, &view_frustum(&t));
-    let cells: Vec<&str> = walk.iter().map(|v| graph.cells[v.cell as usize].name.as_str()).collect();
+    let cells: Vec<&str> = walk
+        .iter()
+        .map(|v| graph.cells[v.cell as usize].name.as_str())
+        .collect();
     assert!(!cells.contains(&"D") && cells.contains(&"C"), "{cells:?}");
 }
 
@@ -324,7 +370,10 @@ fn sampled_lines_in_pvs(scene: &Scene, t: &pvs::Pvs, lines: usize, seed: u64) ->
     for _ in 0..lines {
         let p = &graph.portals[(rng.next_u64() % graph.portals.len() as u64) as usize];
         let q = &graph.portals[(rng.next_u64() % graph.portals.len() as u64) as usize];
-        let (u, v) = (random_on(&mut rng, &p.polygon), random_on(&mut rng, &q.polygon));
+        let (u, v) = (
+            random_on(&mut rng, &p.polygon),
+            random_on(&mut rng, &q.polygon),
+        );
         let dir = v - u;
         if dir.length() < 1e-6 {
             continue;
@@ -360,15 +409,15 @@ fn sampled_lines_in_pvs(scene: &Scene, t: &pvs::Pvs, lines: usize, seed: u64) ->
                 close(&mut run);
                 continue;
             };
-            if let Some(&last) = run.last() {
-                if last != cell {
-                    let x = u + dir * w[0];
-                    let through = graph.portals.iter().any(|pt| {
-                        (pt.cells == [last, cell] || pt.cells == [cell, last]) && inside_portal(x, pt)
-                    });
-                    if !through {
-                        close(&mut run);
-                    }
+            if let Some(&last) = run.last()
+                && last != cell
+            {
+                let x = u + dir * w[0];
+                let through = graph.portals.iter().any(|pt| {
+                    (pt.cells == [last, cell] || pt.cells == [cell, last]) && inside_portal(x, pt)
+                });
+                if !through {
+                    close(&mut run);
                 }
             }
             if run.last() != Some(&cell) {
@@ -391,19 +440,27 @@ fn pvs_holds_every_sampled_line_of_sight_and_is_symmetric() {
 
     let scene = grid_level(4, 4, 0, 7);
     let calls = std::sync::atomic::AtomicUsize::new(0);
-    let t = pvs::compute(scene.cells().unwrap(), &PvsOptions::default(), &|done, total| {
-        assert!(done <= total && total == 16);
-        calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    })
+    let t = pvs::compute(
+        scene.cells().unwrap(),
+        &PvsOptions::default(),
+        &|done, total| {
+            assert!(done <= total && total == 16);
+            calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        },
+    )
     .unwrap();
     assert_eq!(calls.into_inner(), 16);
     assert!(t.is_symmetric());
     assert!(t.incomplete.is_empty());
     let found = sampled_lines_in_pvs(&scene, &t, 20_000, 2);
     let pairs: usize = (0..16).map(|a| t.count(a)).sum();
-    assert!(found > 16 && found <= pairs, "{found} of {pairs}");
-    // Rooms see far less than the whole level.
-    assert!(pairs < 16 * 16 * 3 / 4, "{pairs} of 256");
+    println!("grid 4x4: sampled lines found {found} of the {pairs} pairs of the PVS");
+    // Over-estimated, but little: the lines find nearly every pair of the table (this
+    // open level's rooms see most of it; 400,000 lines find 226 of its 228 pairs).
+    assert!(
+        found <= pairs && found * 100 >= pairs * 95,
+        "{found} of {pairs}"
+    );
 }
 
 #[test]
@@ -462,7 +519,11 @@ fn check_view(
             camera.eye
         );
         for p in scene.objects()[k].mesh.polygons_of_face(face) {
-            assert!(!culling.faces[base[k] + p], "visible face {id} culled from {:?}", camera.eye);
+            assert!(
+                !culling.faces[base[k] + p],
+                "visible face {id} culled from {:?}",
+                camera.eye
+            );
         }
     }
     let culled = View::new_culled(scene, camera, vp, &opts, culling.clone()).unwrap();
@@ -470,9 +531,15 @@ fn check_view(
     assert_eq!(f.ids, full.ids, "ids from {:?}", camera.eye);
     assert_eq!(f.depth, full.depth, "depth from {:?}", camera.eye);
     let graph = scene.cells().unwrap();
-    let in_cells: std::collections::HashSet<u32> =
-        graph.cells.iter().flat_map(|c| c.objects.iter().copied()).collect();
-    let hidden: Vec<u32> = in_cells.into_iter().filter(|&k| !visible[k as usize]).collect();
+    let in_cells: std::collections::HashSet<u32> = graph
+        .cells
+        .iter()
+        .flat_map(|c| c.objects.iter().copied())
+        .collect();
+    let hidden: Vec<u32> = in_cells
+        .into_iter()
+        .filter(|&k| !visible[k as usize])
+        .collect();
     let culled_hidden = hidden
         .iter()
         .filter(|&&k| culling.objects[k as usize].is_some())
@@ -499,7 +566,14 @@ fn viewpoints(scene: &Scene, n: usize, seed: u64) -> Vec<Camera> {
         let a = rng.range(0.0, std::f64::consts::TAU);
         let dir = DVec3::new(a.cos(), rng.range(-0.4, 0.4), a.sin());
         let fov = rng.range(40.0, 100.0);
-        v.push(Camera::perspective(eye, eye + dir, DVec3::Y, fov, 0.05, 200.0));
+        v.push(Camera::perspective(
+            eye,
+            eye + dir,
+            DVec3::Y,
+            fov,
+            0.05,
+            200.0,
+        ));
     }
     v
 }
@@ -519,14 +593,20 @@ fn conservative_on(scene: &Scene, options: &CullOptions, views: usize, seed: u64
 
 #[test]
 fn portal_culling_is_conservative_and_effective() {
-    for (name, scene) in [("five cells", five_cells(3)), ("grid 4x4", grid_level(4, 4, 3, 11))] {
+    for (name, scene) in [
+        ("five cells", five_cells(3)),
+        ("grid 4x4", grid_level(4, 4, 3, 11)),
+    ] {
         for bbox in [false, true] {
             let options = CullOptions {
                 portal_bounding_box: bbox,
                 ..CullOptions::with_method(CullMethod::Portals)
             };
             let f = conservative_on(&scene, &options, 30, 21);
-            println!("{name}, portals (bounding box {bbox}): {:.0}% of hidden objects culled", 100.0 * f);
+            println!(
+                "{name}, portals (bounding box {bbox}): {:.0}% of hidden objects culled",
+                100.0 * f
+            );
             assert!(f > 0.5, "{name}: {f}");
         }
     }
@@ -534,10 +614,16 @@ fn portal_culling_is_conservative_and_effective() {
 
 #[test]
 fn screen_portals_are_conservative_and_effective() {
-    for (name, scene) in [("five cells", five_cells(3)), ("grid 4x4", grid_level(4, 4, 3, 11))] {
+    for (name, scene) in [
+        ("five cells", five_cells(3)),
+        ("grid 4x4", grid_level(4, 4, 3, 11)),
+    ] {
         let options = CullOptions::with_method(CullMethod::ScreenPortals);
         let f = conservative_on(&scene, &options, 30, 22);
-        println!("{name}, screen portals: {:.0}% of hidden objects culled", 100.0 * f);
+        println!(
+            "{name}, screen portals: {:.0}% of hidden objects culled",
+            100.0 * f
+        );
         assert!(f > 0.5, "{name}: {f}");
     }
 }
@@ -558,7 +644,10 @@ fn portal_methods_conservative_on_hundreds_of_viewpoints() {
             ..CullOptions::with_method(method)
         };
         let f = conservative_on(&scene, &options, 400, 5);
-        println!("{method:?} bbox {bbox}: {:.1}% of hidden objects culled", 100.0 * f);
+        println!(
+            "{method:?} bbox {bbox}: {:.1}% of hidden objects culled",
+            100.0 * f
+        );
     }
 }
 
@@ -588,9 +677,17 @@ fn viewer_outside_every_cell_culls_nothing_by_portals_and_says_so() {
     let plain = crate::scene::demo::city(3, 3, 1);
     let index = SceneIndex::new(&plain);
     let c = index
-        .cull(&camera, Viewport::new(64, 36).unwrap(), &CullOptions::with_method(CullMethod::Portals))
+        .cull(
+            &camera,
+            Viewport::new(64, 36).unwrap(),
+            &CullOptions::with_method(CullMethod::Portals),
+        )
         .unwrap();
-    assert!(c.notes.iter().any(|n| n.contains("no cells")), "{:?}", c.notes);
+    assert!(
+        c.notes.iter().any(|n| n.contains("no cells")),
+        "{:?}",
+        c.notes
+    );
 }
 
 #[test]
@@ -607,7 +704,12 @@ fn portal_culling_reasons_and_the_cached_pvs() {
         0.05,
         200.0,
     );
-    let (_, _, c) = check_view(&scene, &index, &camera, &CullOptions::with_method(CullMethod::Portals));
+    let (_, _, c) = check_view(
+        &scene,
+        &index,
+        &camera,
+        &CullOptions::with_method(CullMethod::Portals),
+    );
     let graph = scene.cells().unwrap();
     for cell in [1usize, 2] {
         for &k in &graph.cells[cell].objects {

@@ -203,7 +203,7 @@ impl Walk<'_> {
     /// incomplete).
     fn step(&mut self) -> Result<bool> {
         self.tree.sequences += 1;
-        if self.tree.sequences % 256 == 0 {
+        if self.tree.sequences.is_multiple_of(256) {
             self.deadline.check("PVS precomputation (stab trees)")?;
         }
         if self.tree.sequences > self.max_sequences {
