@@ -216,6 +216,7 @@ pub struct SceneIndex<'s> {
     clusters: OnceLock<crate::cull::clusters::Clusters>,
     occluder_candidates: OnceLock<crate::cull::occluders::select::OccluderCandidates>,
     cluster_bvh: OnceLock<crate::cull::occluders::walk::ClusterBvh>,
+    pvs: OnceLock<Option<crate::cull::portals::Pvs>>,
     counters: Counters,
 }
 
@@ -245,6 +246,7 @@ impl<'s> SceneIndex<'s> {
             clusters: OnceLock::new(),
             occluder_candidates: OnceLock::new(),
             cluster_bvh: OnceLock::new(),
+            pvs: OnceLock::new(),
             counters: Counters::default(),
         }
     }
@@ -315,6 +317,24 @@ impl<'s> SceneIndex<'s> {
     pub fn cluster_bvh(&self) -> &crate::cull::occluders::walk::ClusterBvh {
         self.cluster_bvh
             .get_or_init(|| crate::cull::occluders::walk::ClusterBvh::new(self.clusters()))
+    }
+
+    /// The PVS table of the scene's cells ([`crate::cull::portals::pvs::compute`] with
+    /// the default options: no time limit, a budget of portal sequences per cell), built
+    /// once; `None` for a scene without cells.
+    pub fn pvs(&self) -> Option<&crate::cull::portals::Pvs> {
+        self.pvs
+            .get_or_init(|| {
+                let graph = self.scene.cells()?;
+                // Without a deadline the computation cannot fail.
+                crate::cull::portals::pvs::compute(
+                    graph,
+                    &crate::cull::portals::PvsOptions::default(),
+                    &|_, _| {},
+                )
+                .ok()
+            })
+            .as_ref()
     }
 
     /// Decides what one view cannot see ([`crate::cull::occlusion::cull`]).

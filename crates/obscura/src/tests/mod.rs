@@ -12,6 +12,7 @@ mod depth_sort;
 mod hsr_scenes;
 mod occluders;
 mod octree;
+mod portals;
 mod raycast;
 mod scanline;
 mod warnock;
