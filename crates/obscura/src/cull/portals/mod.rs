@@ -13,9 +13,16 @@
 //!
 //! STUB of the contract: the model types; the methods cull nothing yet.
 
+pub mod floorplan;
+mod locate;
 mod model;
+pub mod prt;
+mod validate;
 
-pub use model::{Cell, CellGraph, Portal};
+pub use floorplan::{Door, FloorPlan, Furniture, Room, seed_example};
+pub use locate::CellIndex;
+pub use model::{Cell, CellGraph, CellIndexCache, Portal};
+pub use validate::{CellIssue, CellIssueKind, CellReport, CellShape};
 
 use super::occlusion::{CullOptions, Culling};
 use crate::Result;
