@@ -446,8 +446,8 @@ pub(crate) fn box_meets_cell(b: &Aabb, planes: &[Plane]) -> bool {
 /// - **one portal** (A-D, D-E, E-C, C-B): visible, through the portal itself.
 /// - **two portals** (A-E through AD, DE; D-C through DE, EC; E-B through EC, CB):
 ///   visible. Two portals on different walls of one convex cell: the segment joining
-///   their midpoints lies in that cell and crosses both walls. E.g. (-1, 4.2) in A to
-///   (1.7, 0.5) in E passes AD at z = 3.5 and DE at x = 1.2 (checked by the tests).
+///   their midpoints lies in that cell and crosses both walls. E.g. (-0.75, 5) in A to
+///   (2.25, 1) in E passes AD at z = 4 and DE at x = 1.5 (checked by the tests).
 /// - **three portals, A-C** (AD, DE, EC): not visible. A line through AD `(0, za)`,
 ///   `za in [3.5, 4.5]`, and DE `(xd, 2)`, `xd in [1, 2]`, goes down to the right and
 ///   meets E's far wall z = 0 at `x = xd + 2 xd / (za - 2) <= 2 + 4 / 1.5 = 4.67 < 9`,
