@@ -691,3 +691,164 @@ fn bad_floor_plans_are_refused_by_name() {
     let _ = Camera::perspective(DVec3::ZERO, DVec3::X, DVec3::Y, 60.0, 0.1, 10.0);
     let _ = plan_walk(&level_plan(2, 2, 1), 3, 2);
 }
+
+/// A scene file with cells of the three kinds (box, floor polygon, planes), portals,
+/// and objects assigned by name or by their bounds.
+const TOML_CELLS: &str = r#"
+[camera]
+eye = [1, 1.5, 1]
+target = [5, 1.5, 1]
+
+[[object]]
+name = "crate"
+primitive = "box"
+size = [0.5, 0.5, 0.5]
+translate = [1, 0.25, 1]
+
+[[object]]
+name = "barrel"
+primitive = "box"
+size = [0.5, 0.5, 0.5]
+translate = [5, 0.25, 1]
+cells = ["east", "north"]
+
+[[cell]]
+name = "west"
+min = [0, 0, 0]
+max = [2, 3, 2]
+
+[[cell]]
+name = "east"
+floor = [[2, 0], [6, 0], [6, 2], [2, 2]]
+height = 3
+
+[[cell]]
+name = "north"
+planes = [[1, 0, 0, -2], [-1, 0, 0, 0], [0, 1, 0, -3], [0, -1, 0, 0], [0, 0, 1, -4], [0, 0, -1, 2]]
+
+[[portal]]
+cells = ["west", "east"]
+polygon = [[2, 0, 0], [2, 0, 2], [2, 3, 2], [2, 3, 0]]
+
+[[portal]]
+cells = ["north", "west"]
+polygon = [[0, 0, 2], [2, 0, 2], [2, 3, 2], [0, 3, 2]]
+"#;
+
+fn load_toml(name: &str, text: &str) -> crate::Result<Scene> {
+    let dir = std::env::temp_dir().join(format!("obscura-cells-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("scene.toml");
+    std::fs::write(&file, text).unwrap();
+    let r = Scene::load(&file);
+    std::fs::remove_dir_all(&dir).ok();
+    r
+}
+
+/// The 1-based line of the first occurrence of `needle` in `text`.
+fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.find(needle).unwrap()].matches('\n').count() + 1
+}
+
+#[test]
+fn scene_files_describe_cells_and_portals() {
+    let scene = load_toml("ok", TOML_CELLS).unwrap();
+    let g = scene.cells().unwrap();
+    let names: Vec<&str> = g.cells.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["west", "east", "north"]);
+    assert_eq!(g.portals.len(), 2);
+    assert_eq!(g.portals[1].cells, [2, 0]);
+    // The three kinds describe the boxes they should: a point of each.
+    assert_eq!(g.locate(DVec3::new(1.0, 1.0, 1.0)), Some(0));
+    assert_eq!(g.locate(DVec3::new(4.0, 1.0, 1.0)), Some(1));
+    assert_eq!(g.locate(DVec3::new(1.0, 1.0, 3.0)), Some(2));
+    assert_eq!(g.locate(DVec3::new(4.0, 1.0, 3.0)), None);
+    assert_eq!(g.locate(DVec3::new(4.0, 3.5, 1.0)), None);
+    // "crate" by its bounds (in west only), "barrel" where its table says.
+    assert_eq!(g.cells[0].objects, vec![0]);
+    assert_eq!(g.cells[1].objects, vec![1]);
+    assert_eq!(g.cells[2].objects, vec![1]);
+    // "barrel" lies outside "north": a warning in the scene's report.
+    assert!(
+        scene
+            .report()
+            .messages
+            .iter()
+            .any(|m| m.contains("barrel") && m.contains("north"))
+    );
+
+    // Errors, each at its line.
+    let cases: Vec<(String, &str, &str)> = vec![
+        // The portal west-east shrunk: the rest of the shared face leaks.
+        (
+            TOML_CELLS.replace(
+                "[2, 0, 0], [2, 0, 2], [2, 3, 2], [2, 3, 0]",
+                "[2, 0, 0], [2, 0, 1], [2, 3, 1], [2, 3, 0]",
+            ),
+            "name = \"west\"",
+            "leak",
+        ),
+        // A portal off the boundary.
+        (
+            TOML_CELLS.replace(
+                "[2, 0, 0], [2, 0, 2], [2, 3, 2], [2, 3, 0]",
+                "[2.5, 0, 0], [2.5, 0, 2], [2.5, 3, 2], [2.5, 3, 0]",
+            ),
+            "cells = [\"west\", \"east\"]",
+            "boundary",
+        ),
+        (
+            TOML_CELLS.replace("cells = [\"east\", \"north\"]", "cells = [\"attic\"]"),
+            "cells = [\"attic\"]",
+            "attic",
+        ),
+        (
+            TOML_CELLS.replace("name = \"north\"", "name = \"west\""),
+            "name = \"west\"\nplanes",
+            "second cell",
+        ),
+        (
+            TOML_CELLS.replace(
+                "[[2, 0], [6, 0], [6, 2], [2, 2]]",
+                "[[2, 0], [6, 0], [4, 1], [6, 2], [2, 2]]",
+            ),
+            "floor =",
+            "convex",
+        ),
+        // An open cell: north without its plane z <= 4.
+        (
+            TOML_CELLS.replace(", [0, 0, 1, -4]", ""),
+            "name = \"north\"",
+            "open",
+        ),
+        (
+            TOML_CELLS.replace("height = 3\n", ""),
+            "name = \"east\"",
+            "height",
+        ),
+    ];
+    for (text, at, what) in &cases {
+        let e = load_toml("bad", text).unwrap_err();
+        let line = line_of(text, at);
+        match &e {
+            Error::Parse {
+                line: l, message, ..
+            } => {
+                assert!(message.contains(what), "{what}: {message}");
+                assert!(
+                    *l == line || *l + 1 == line || *l == line + 1,
+                    "{what}: line {l}, expected about {line}: {message}"
+                );
+            }
+            other => panic!("{what}: {other:?}"),
+        }
+    }
+    // Cells named without [[cell]] tables, and portals without cells.
+    let no_cells = "[[object]]\nprimitive = \"box\"\ncells = [\"a\"]\n";
+    assert!(
+        load_toml("nc", no_cells)
+            .unwrap_err()
+            .to_string()
+            .contains("no [[cell]]")
+    );
+}

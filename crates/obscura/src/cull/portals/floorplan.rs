@@ -150,20 +150,8 @@ impl FloorPlan {
             return Err(Error::option("height", "the wall height must be positive"));
         }
         for r in &self.rooms {
-            let what = format!("room \"{}\"", r.name);
-            if r.polygon.len() < 3 || !r.polygon.iter().all(|p| p.is_finite()) {
-                return Err(bad(what, "needs at least 3 finite vertices"));
-            }
-            let p = r.ccw();
-            if signed_area(&p) <= 1e-12 {
-                return Err(bad(what, "has no area"));
-            }
-            let n = p.len();
-            for i in 0..n {
-                let (a, b, c) = (p[i], p[(i + 1) % n], p[(i + 2) % n]);
-                if (b - a).perp_dot(c - b) < -1e-12 {
-                    return Err(bad(what, "is not convex"));
-                }
+            if let Err(m) = convex_ccw(&r.polygon) {
+                return Err(bad(format!("room \"{}\"", r.name), m));
             }
         }
         for (i, d) in self.doors.iter().enumerate() {
@@ -192,19 +180,9 @@ impl FloorPlan {
         // Cells.
         let mut cells = Vec::new();
         for (room, poly) in self.rooms.iter().zip(&rooms) {
-            let mut planes = Vec::new();
-            for i in 0..poly.len() {
-                let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-                let e = (b - a).normalize();
-                // Outward for a counter-clockwise polygon in (x, z): (e.z, -e.x).
-                let n = DVec3::new(e.y, 0.0, -e.x);
-                planes.push(Plane::from_point_normal(at(a, 0.0), n));
-            }
-            planes.push(Plane::from_point_normal(DVec3::ZERO, DVec3::NEG_Y));
-            planes.push(Plane::from_point_normal(DVec3::new(0.0, h, 0.0), DVec3::Y));
             cells.push(Cell {
                 name: room.name.clone(),
-                planes,
+                planes: prism_planes(poly, 0.0, h),
                 objects: Vec::new(),
             });
         }
@@ -379,6 +357,50 @@ impl FloorPlan {
         assign_objects(&mut graph, &scene);
         Ok((graph, scene))
     }
+}
+
+/// The planes (normals out) of a convex polygon of the ground plane, `(x, z)` per
+/// vertex counter-clockwise (positive shoelace area in `(x, z)`), extruded from `y0` to
+/// `y1`: one vertical plane per edge, then the floor and the ceiling.
+#[must_use]
+pub fn prism_planes(poly: &[DVec2], y0: f64, y1: f64) -> Vec<Plane> {
+    let mut planes = Vec::new();
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let e = (b - a).normalize();
+        // Outward for a counter-clockwise polygon in (x, z): (e.z, -e.x).
+        let n = DVec3::new(e.y, 0.0, -e.x);
+        planes.push(Plane::from_point_normal(DVec3::new(a.x, y0, a.y), n));
+    }
+    planes.push(Plane::from_point_normal(
+        DVec3::new(0.0, y0, 0.0),
+        DVec3::NEG_Y,
+    ));
+    planes.push(Plane::from_point_normal(DVec3::new(0.0, y1, 0.0), DVec3::Y));
+    planes
+}
+
+/// Checks a ground-plane polygon for a room or cell: at least 3 finite vertices, an
+/// area, convex; gives it counter-clockwise in `(x, z)`.
+pub(crate) fn convex_ccw(polygon: &[DVec2]) -> std::result::Result<Vec<DVec2>, &'static str> {
+    if polygon.len() < 3 || !polygon.iter().all(|p| p.is_finite()) {
+        return Err("needs at least 3 finite vertices");
+    }
+    let mut p = polygon.to_vec();
+    if signed_area(&p) < 0.0 {
+        p.reverse();
+    }
+    if signed_area(&p) <= 1e-12 {
+        return Err("has no area");
+    }
+    let n = p.len();
+    for i in 0..n {
+        let (a, b, c) = (p[i], p[(i + 1) % n], p[(i + 2) % n]);
+        if (b - a).perp_dot(c - b) < -1e-12 {
+            return Err("is not convex");
+        }
+    }
+    Ok(p)
 }
 
 fn wall_error(room: usize, edge: usize, e: &impl std::fmt::Display) -> Error {

@@ -22,6 +22,7 @@ mod validate;
 pub use floorplan::{Door, FloorPlan, Furniture, Room, seed_example};
 pub use locate::CellIndex;
 pub use model::{Cell, CellGraph, CellIndexCache, Portal};
+#[cfg(test)]
 pub(crate) use validate::segment_hits_scene;
 pub use validate::{CellIssue, CellIssueKind, CellReport, CellShape};
 

@@ -219,8 +219,8 @@ pub enum CellIssueKind {
         /// The object.
         object: u32,
     },
-    /// A place on a cell's boundary where one can see out (no scene face closes it)
-    /// and no portal covers it: a door without a portal.
+    /// A place on a cell's boundary where one can see into another cell (no scene face
+    /// closes it) and no portal covers it: a door without a portal.
     Leak {
         /// The cell.
         cell: usize,
@@ -680,6 +680,11 @@ fn scene_checks(
                     .iter()
                     .any(|poly| segment_hits_polygon(a, b, poly, eps))
                 {
+                    continue;
+                }
+                // Only an opening into another cell leaks (one into the void beyond
+                // the level shows nothing that culling could remove).
+                if graph.locate(b).is_none_or(|o| o as usize == ci) {
                     continue;
                 }
                 if !segment_hits_scene(scene, a, b, eps) {
