@@ -86,11 +86,12 @@ pub fn parse_prt(text: &str, path: &Path) -> Result<CellGraph> {
     let mut rest: Vec<(usize, &str)> = lines.collect();
     // Quake III's optional line with the number of solid faces.
     let mut faces_declared = 0usize;
-    if let Some(&(_, l)) = rest.first() {
-        if !l.is_empty() && l.bytes().all(|b| b.is_ascii_digit()) {
-            faces_declared = l.parse().unwrap_or(usize::MAX);
-            rest.remove(0);
-        }
+    if let Some(&(_, l)) = rest.first()
+        && !l.is_empty()
+        && l.bytes().all(|b| b.is_ascii_digit())
+    {
+        faces_declared = l.parse().unwrap_or(usize::MAX);
+        rest.remove(0);
     }
     if portals_declared > rest.len() {
         let last = rest.last().map_or(nl, |r| r.0);
@@ -139,13 +140,13 @@ pub fn parse_prt(text: &str, path: &Path) -> Result<CellGraph> {
             ),
         ));
     }
-    if faces_declared == 0 {
-        if let Some(&(n, _)) = faces.first() {
-            return Err(err(
-                n,
-                format!("more lines than the {portals_declared} portals announced"),
-            ));
-        }
+    if faces_declared == 0
+        && let Some(&(n, _)) = faces.first()
+    {
+        return Err(err(
+            n,
+            format!("more lines than the {portals_declared} portals announced"),
+        ));
     }
     for &(n, l) in faces {
         parse_polygon_line(l, 1, false).map_err(|m| err(n, m))?;

@@ -66,15 +66,13 @@ impl CellShape {
                         continue;
                     };
                     let scale = 1.0 + p.abs().max_element();
-                    if all.iter().all(|pl| pl.evaluate(p) <= tol * scale) {
-                        if vertices.iter().all(|v| v.distance(p) > 1e-9 * scale) {
-                            if i >= own || j >= own || k >= own {
-                                // On the huge box: only counts as open if it is
-                                // not also on the cell's own planes alone.
-                                open = true;
-                            }
-                            vertices.push(p);
-                        }
+                    if all.iter().all(|pl| pl.evaluate(p) <= tol * scale)
+                        && vertices.iter().all(|v| v.distance(p) > 1e-9 * scale)
+                    {
+                        // A vertex on the huge box: the cell's own planes leave the
+                        // region unbounded.
+                        open |= i >= own || j >= own || k >= own;
+                        vertices.push(p);
                     }
                 }
             }
