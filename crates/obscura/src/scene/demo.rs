@@ -394,7 +394,8 @@ const LEVEL_SEED: u64 = 24;
 /// (4 to 7 units a side, with furniture) and corridors (2 deep), joined by doors (a
 /// random spanning tree of the grid plus about a quarter of the other walls), walls 3
 /// high with door holes, floors and ceilings; its cells and portals set on the scene
-/// ([`Scene::cells`]), and a camera inside the first room. [`level_walk`] walks it.
+/// ([`Scene::cells`]), and a camera inside the first room looking at its door.
+/// [`level_walk`] walks it.
 #[must_use]
 pub fn level() -> Scene {
     level_scene(5, 5, LEVEL_SEED)
@@ -411,11 +412,23 @@ fn level_scene(nx: usize, nz: usize, seed: u64) -> Scene {
     let plan = crate::cull::portals::floorplan::level_plan(nx, nz, seed);
     let (graph, mut scene) = plan.build().expect("the generated plan is valid");
     scene.set_cells(Some(std::sync::Arc::new(graph)));
+    // In the first room's corner farthest from its first door, looking at the door.
     let room = &plan.rooms[0].polygon;
-    let (lo, hi) = (room[0], room[2]);
+    let centre = room.iter().copied().sum::<glam::DVec2>() / room.len() as f64;
+    let look = plan
+        .doors
+        .iter()
+        .find(|d| d.rooms.contains(&0))
+        .map_or(room[2], |d| (d.a + d.b) * 0.5);
+    let corner = room
+        .iter()
+        .copied()
+        .max_by(|a, b| a.distance(look).total_cmp(&b.distance(look)))
+        .unwrap_or(room[0]);
+    let eye = corner + (centre - corner).normalize_or_zero() * 0.8;
     scene.set_camera(Some(Camera::perspective(
-        DVec3::new(lo.x + 0.6, 1.6, lo.y + 0.6),
-        DVec3::new(hi.x, 1.2, hi.y),
+        DVec3::new(eye.x, 1.6, eye.y),
+        DVec3::new(look.x, 1.2, look.y),
         DVec3::Y,
         75.0,
         0.05,
