@@ -86,6 +86,14 @@ pub enum Error {
         /// What is wrong with it.
         message: String,
     },
+    /// A cells-and-portals model is wrong: a portal off its cells' boundary, an open
+    /// or empty cell, overlapping cells, a leak; the message names the cells and
+    /// portals and where the problem is.
+    #[error("cells and portals: {message}")]
+    InvalidCells {
+        /// What is wrong, naming the cells and portals and the place.
+        message: String,
+    },
     /// The scene has nothing to render.
     #[error("the scene is empty: {0}")]
     EmptyScene(String),

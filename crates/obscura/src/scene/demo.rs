@@ -9,6 +9,9 @@
 //! | `sphere` | a UV sphere of about a million triangles (benchmarks) | 998,000 |
 //! | `city` | 10,000 boxes on a ground plane | 120,001 |
 //! | `triangles` | 10,000 large overlapping triangles (z-buffer fill-rate benchmark) | 10,000 |
+//! | `level` | a level of 25 cells (rooms, corridors, doors, furniture) with its cells and portals | ~1k |
+//! | `level-grid` | a generated level of 100 cells (PVS speed) | ~4k |
+//! | `cells5` | the seed's five cells A..E of the PVS example ([`crate::cull::portals::seed_example`]) | ~60 |
 //!
 //! Generators produce counter-clockwise faces seen from outside, so closed ones can be
 //! back-face culled.
@@ -23,7 +26,7 @@ use crate::{Error, Result};
 use crate::rng::SplitMix64;
 
 /// The names [`Scene::demo`] (and the CLI's `demo:NAME`) accepts.
-pub const NAMES: [&str; 7] = [
+pub const NAMES: [&str; 10] = [
     "default",
     "seed-task",
     "cube",
@@ -31,6 +34,9 @@ pub const NAMES: [&str; 7] = [
     "city",
     "blocks",
     "triangles",
+    "level",
+    "level-grid",
+    "cells5",
 ];
 
 /// A built-in scene by name.
@@ -43,6 +49,9 @@ pub fn scene(name: &str) -> Result<Scene> {
         "city" => Ok(city(100, 100, 7)),
         "blocks" => Ok(blocks(10, 10, 7)),
         "triangles" => Ok(overlapping_triangles(10_000, 11)),
+        "level" => Ok(level()),
+        "level-grid" => Ok(level_grid(10)),
+        "cells5" => Ok(crate::cull::portals::seed_example().1),
         _ => Err(Error::UnknownDemo {
             name: name.to_string(),
             known: NAMES.join(", "),
@@ -376,6 +385,64 @@ pub fn overlapping_triangles(n: usize, seed: u64) -> Scene {
         30.0,
     )));
     s
+}
+
+/// The seed of [`level`]'s generator.
+const LEVEL_SEED: u64 = 24;
+
+/// The demo level (`demo:level`): 25 cells in a 5 x 5 grid, whose rows alternate rooms
+/// (4 to 7 units a side, with furniture) and corridors (2 deep), joined by doors (a
+/// random spanning tree of the grid plus about a quarter of the other walls), walls 3
+/// high with door holes, floors and ceilings; its cells and portals set on the scene
+/// ([`Scene::cells`]), and a camera inside the first room looking at its door.
+/// [`level_walk`] walks it.
+#[must_use]
+pub fn level() -> Scene {
+    level_scene(5, 5, LEVEL_SEED)
+}
+
+/// A generated level of `n * n` cells (`demo:level-grid` is `level_grid(10)`, 100
+/// cells: the PVS speed target), built like [`level`].
+#[must_use]
+pub fn level_grid(n: usize) -> Scene {
+    level_scene(n, n, LEVEL_SEED + 1)
+}
+
+fn level_scene(nx: usize, nz: usize, seed: u64) -> Scene {
+    let plan = crate::cull::portals::floorplan::level_plan(nx, nz, seed);
+    let (graph, mut scene) = plan.build().expect("the generated plan is valid");
+    scene.set_cells(Some(std::sync::Arc::new(graph)));
+    // In the first room's corner farthest from its first door, looking at the door.
+    let room = &plan.rooms[0].polygon;
+    let centre = room.iter().copied().sum::<glam::DVec2>() / room.len() as f64;
+    let look = plan
+        .doors
+        .iter()
+        .find(|d| d.rooms.contains(&0))
+        .map_or(room[2], |d| (d.a + d.b) * 0.5);
+    let corner = room
+        .iter()
+        .copied()
+        .max_by(|a, b| a.distance(look).total_cmp(&b.distance(look)))
+        .unwrap_or(room[0]);
+    let eye = corner + (centre - corner).normalize_or_zero() * 0.8;
+    scene.set_camera(Some(Camera::perspective(
+        DVec3::new(eye.x, 1.6, eye.y),
+        DVec3::new(look.x, 1.2, look.y),
+        DVec3::Y,
+        75.0,
+        0.05,
+        200.0,
+    )));
+    scene
+}
+
+/// A camera walk through [`level`]: a depth-first tour through its doors, 16 legs of 6
+/// cameras (96 views), eyes 1.6 above the floor, always inside a cell.
+#[must_use]
+pub fn level_walk() -> Vec<Camera> {
+    let plan = crate::cull::portals::floorplan::level_plan(5, 5, LEVEL_SEED);
+    crate::cull::portals::floorplan::plan_walk(&plan, 16, 6)
 }
 
 /// The default demo: interpenetrating and overlapping solids on a floor.

@@ -6,6 +6,7 @@
 
 mod bsp;
 mod budget;
+mod cells;
 mod cross_validation;
 mod cull;
 mod depth_sort;

@@ -208,7 +208,7 @@ fn five_cells(furnished: usize) -> Scene {
         cells[A as usize].objects.push(k);
         cells[D as usize].objects.push(k);
     }
-    scene.set_cells(Some(Arc::new(CellGraph { cells, portals })));
+    scene.set_cells(Some(Arc::new(CellGraph::new(cells, portals))));
     scene
 }
 
@@ -271,7 +271,7 @@ fn grid_level(nx: usize, nz: usize, furnished: usize, seed: u64) -> Scene {
             );
         }
     }
-    scene.set_cells(Some(Arc::new(CellGraph { cells, portals })));
+    scene.set_cells(Some(Arc::new(CellGraph::new(cells, portals))));
     scene
 }
 

@@ -11,19 +11,32 @@
 //! simple, fast evaluation of potentially visible sets", Symposium on Interactive 3D
 //! Graphics, 1995.
 //!
-//! Files: [`stab`] (adjacency graph, stab trees), [`pvs`] (the PVS table), [`render`]
-//! (portal rendering with the PVS), [`screen`] (screen-space portals).
+//! Files: `model` (cells, portals, the graph), `validate` (leaks and bad cells with
+//! their places), `locate` (the BSP tree that finds the viewer's cell), [`floorplan`]
+//! (2D plans extruded to walls with door holes; the seed's five cells), [`prt`] (the
+//! Quake tools' PRT1 files), [`stab`] (adjacency graph, stab trees), [`pvs`] (the PVS
+//! table), [`render`] (portal rendering with the PVS), [`screen`] (screen-space
+//! portals).
 
+pub mod floorplan;
+mod locate;
 mod model;
+pub mod prt;
 pub mod pvs;
 pub mod render;
 pub mod screen;
 pub mod stab;
+mod validate;
 
-pub use model::{Cell, CellGraph, Portal};
+pub use floorplan::{Door, FloorPlan, Furniture, Room, seed_example};
+pub use locate::CellIndex;
+pub use model::{Cell, CellGraph, CellIndexCache, Portal};
 pub use pvs::{Pvs, PvsOptions};
 pub use render::{Visit, portal_walk};
 pub use screen::ScreenVisit;
+#[cfg(test)]
+pub(crate) use validate::segment_hits_scene;
+pub use validate::{CellIssue, CellIssueKind, CellReport, CellShape};
 
 use std::time::Instant;
 

@@ -1,6 +1,10 @@
 //! The cell model: convex cells, the portals that join them, the objects each holds.
 
+use std::sync::{Arc, OnceLock};
+
 use glam::DVec3;
+
+use super::locate::{CellIndex, in_cell};
 
 use crate::geom::Plane;
 
@@ -33,20 +37,59 @@ pub struct CellGraph {
     pub cells: Vec<Cell>,
     /// The portals.
     pub portals: Vec<Portal>,
+    /// The BSP tree [`CellGraph::locate`] uses, built on its first call (construct with
+    /// `CellIndexCache::default()`, or `..Default::default()`; after editing `cells`,
+    /// call [`CellGraph::reindex`]).
+    pub index: CellIndexCache,
+}
+
+/// A lazily built [`CellIndex`] (equal to any other: it is derived data).
+#[derive(Clone, Debug, Default)]
+pub struct CellIndexCache(OnceLock<Arc<CellIndex>>);
+
+impl PartialEq for CellIndexCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 impl CellGraph {
+    /// A graph of these cells and portals.
+    #[must_use]
+    pub fn new(cells: Vec<Cell>, portals: Vec<Portal>) -> CellGraph {
+        CellGraph {
+            cells,
+            portals,
+            index: CellIndexCache::default(),
+        }
+    }
+
     /// The cell that holds point `p` (inside or on the boundary of), or `None` for a
-    /// point outside every cell. The first such cell in order when cells share the
-    /// point on a common boundary.
+    /// point outside every cell (and in cells without planes, as a PRT1 import's). The
+    /// first such cell in order when cells share the point on a common boundary.
     ///
-    /// CONTRACT: a linear scan; the builder replaces it by the BSP tree over cell
-    /// boundaries (O(log n)) with the same answers.
+    /// O(log n): descends the BSP tree over the cell boundaries ([`CellIndex`]), built
+    /// on the first call and kept; the answers are those of [`CellGraph::locate_linear`].
     #[must_use]
     pub fn locate(&self, p: DVec3) -> Option<u32> {
-        self.cells
-            .iter()
-            .position(|c| c.planes.iter().all(|pl| pl.signed_distance(p) <= 1e-9))
-            .map(|i| i as u32)
+        self.cell_index().locate(self, p)
+    }
+
+    /// [`CellGraph::locate`] by a linear scan of the cells (the reference).
+    #[must_use]
+    pub fn locate_linear(&self, p: DVec3) -> Option<u32> {
+        (0..self.cells.len())
+            .find(|&c| in_cell(self, c, p))
+            .map(|c| c as u32)
+    }
+
+    /// The BSP tree over the cell boundaries, built on first use.
+    pub fn cell_index(&self) -> &CellIndex {
+        self.index.0.get_or_init(|| Arc::new(CellIndex::new(self)))
+    }
+
+    /// Forgets the BSP tree (after `cells` changed); the next locate rebuilds it.
+    pub fn reindex(&mut self) {
+        self.index = CellIndexCache::default();
     }
 }

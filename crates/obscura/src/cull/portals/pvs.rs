@@ -133,7 +133,7 @@ impl Pvs {
 /// # Example
 /// ```
 /// use obscura::cull::portals::{Cell, CellGraph, Portal, pvs};
-/// let g = CellGraph { cells: vec![], portals: vec![] };
+/// let g = CellGraph::new(vec![], vec![]);
 /// let t = pvs::compute(&g, &pvs::PvsOptions::default(), &|_, _| {}).unwrap();
 /// assert!(t.is_empty());
 /// ```

@@ -72,6 +72,32 @@ struct SceneFile {
     camera: Option<Spanned<CameraSpec>>,
     #[serde(default, rename = "object")]
     objects: Vec<Spanned<ObjectSpec>>,
+    #[serde(default, rename = "cell")]
+    cells: Vec<Spanned<CellSpec>>,
+    #[serde(default, rename = "portal")]
+    portals: Vec<Spanned<PortalSpec>>,
+}
+
+/// A convex cell: `planes`, or a ground-plane polygon `floor` extruded by `height`
+/// from `base`, or an axis-aligned box `min`..`max`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CellSpec {
+    name: Spanned<String>,
+    planes: Option<Spanned<Vec<[f64; 4]>>>,
+    floor: Option<Spanned<Vec<[f64; 2]>>>,
+    height: Option<Spanned<f64>>,
+    base: Option<Spanned<f64>>,
+    min: Option<Spanned<[f64; 3]>>,
+    max: Option<Spanned<[f64; 3]>>,
+}
+
+/// A portal: the two cells it joins (by name) and its convex polygon.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PortalSpec {
+    cells: Spanned<[String; 2]>,
+    polygon: Spanned<Vec<[f64; 3]>>,
 }
 
 #[derive(Deserialize)]
@@ -125,6 +151,8 @@ struct ObjectSpec {
     rotate: Option<Spanned<[f64; 3]>>,
     scale: Option<Spanned<Scale>>,
     matrix: Option<Spanned<Vec<f64>>>,
+    // Cells and portals: the cells (by name) that hold the object.
+    cells: Option<Spanned<Vec<String>>>,
 }
 
 /// The primitives and the parameters each accepts.
@@ -222,16 +250,20 @@ impl SceneReader<'_, '_> {
             let span = spec.span();
             let descs = self.objects_of(spec.get_ref(), &span, k, &mut scene, &mut file_up)?;
             self.count_placed(&descs, &span)?;
-            placed.push((span, descs));
+            placed.push((span, descs, k));
         }
-        for (span, descs) in placed {
+        // For each table, the scene's objects it placed.
+        let mut table_objects: Vec<Vec<u32>> = vec![Vec::new(); file.objects.len()];
+        for (span, descs, k) in placed {
             for d in descs {
                 let name = d.name.clone();
-                scene.add(d).map_err(|e| {
+                let i = scene.add(d).map_err(|e| {
                     self.error(&span, format!("object \"{name}\" cannot be placed: {e}"))
                 })?;
+                table_objects[k].push(i as u32);
             }
         }
+        self.cells(&file, &table_objects, &mut scene)?;
         let up = match &file.up {
             Some(up) => Some(self.direction(up.get_ref(), &up.span(), "up")?),
             None => file_up,
@@ -245,6 +277,199 @@ impl SceneReader<'_, '_> {
             scene.set_camera(Some(camera));
         }
         Ok(scene)
+    }
+
+    /// The `[[cell]]` and `[[portal]]` tables: the scene's cells and portals, checked
+    /// ([`CellGraph::validate`](crate::cull::portals::CellGraph::validate)); objects
+    /// go in the cells their table names, or, without `cells`, in every cell their
+    /// bounds meet.
+    fn cells(&self, file: &SceneFile, table_objects: &[Vec<u32>], scene: &mut Scene) -> Result<()> {
+        use crate::cull::portals::floorplan::{assign_objects, convex_ccw, prism_planes};
+        use crate::cull::portals::{Cell, CellGraph, CellIssueKind, Portal};
+        use crate::geom::Plane;
+        if file.cells.is_empty() {
+            if let Some(p) = file.portals.first() {
+                return Err(self.error(&p.span(), "a [[portal]] needs [[cell]] tables"));
+            }
+            if let Some(c) = file.objects.iter().find_map(|o| o.get_ref().cells.as_ref()) {
+                return Err(self.error(
+                    &c.span(),
+                    "`cells` names cells, but the file has no [[cell]] table",
+                ));
+            }
+            return Ok(());
+        }
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let mut cells: Vec<Cell> = Vec::new();
+        for spec in &file.cells {
+            let c = spec.get_ref();
+            let span = spec.span();
+            let name = c.name.get_ref().clone();
+            if cells.iter().any(|k| k.name == name) {
+                return Err(self.error(&c.name.span(), format!("a second cell named \"{name}\"")));
+            }
+            let kinds = [
+                c.planes.is_some(),
+                c.floor.is_some(),
+                c.min.is_some() || c.max.is_some(),
+            ];
+            if kinds.iter().filter(|&&k| k).count() != 1 {
+                return Err(self.error(
+                    &span,
+                    format!("cell \"{name}\": give exactly one of `planes`, `floor` (with `height`), or `min` and `max`"),
+                ));
+            }
+            if c.floor.is_none() && (c.height.is_some() || c.base.is_some()) {
+                return Err(self.error(
+                    &span,
+                    format!("cell \"{name}\": `height` and `base` go with `floor`"),
+                ));
+            }
+            let planes = if let Some(pl) = &c.planes {
+                let mut planes = Vec::new();
+                for v in pl.get_ref() {
+                    let normal = DVec3::new(v[0], v[1], v[2]);
+                    if !finite(v) || normal.length() == 0.0 {
+                        return Err(self.error(
+                            &pl.span(),
+                            format!("cell \"{name}\": plane {v:?}: needs a finite, non-zero normal [a, b, c, d]"),
+                        ));
+                    }
+                    planes.push(Plane { normal, d: v[3] });
+                }
+                planes
+            } else if let Some(floor) = &c.floor {
+                let poly: Vec<glam::DVec2> = floor
+                    .get_ref()
+                    .iter()
+                    .map(|p| glam::DVec2::new(p[0], p[1]))
+                    .collect();
+                let poly = convex_ccw(&poly).map_err(|m| {
+                    self.error(&floor.span(), format!("cell \"{name}\": floor polygon {m}"))
+                })?;
+                let base = c.base.as_ref().map_or(0.0, |b| *b.get_ref());
+                let Some(height) = &c.height else {
+                    return Err(self.error(
+                        &span,
+                        format!("cell \"{name}\": a `floor` needs a `height`"),
+                    ));
+                };
+                let h = *height.get_ref();
+                if !(h.is_finite() && h > 0.0 && base.is_finite()) {
+                    return Err(self.error(
+                        &height.span(),
+                        format!("cell \"{name}\": height must be positive, base finite"),
+                    ));
+                }
+                prism_planes(&poly, base, base + h)
+            } else {
+                let (Some(min), Some(max)) = (&c.min, &c.max) else {
+                    return Err(self.error(
+                        &span,
+                        format!("cell \"{name}\": a box needs both `min` and `max`"),
+                    ));
+                };
+                let (lo, hi) = (
+                    DVec3::from_array(*min.get_ref()),
+                    DVec3::from_array(*max.get_ref()),
+                );
+                if !(lo.is_finite() && hi.is_finite() && lo.cmplt(hi).all()) {
+                    return Err(self.error(
+                        &max.span(),
+                        format!("cell \"{name}\": `max` must exceed `min` on every axis"),
+                    ));
+                }
+                let mut planes = Vec::new();
+                for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+                    planes.push(Plane::from_point_normal(hi, axis));
+                    planes.push(Plane::from_point_normal(lo, -axis));
+                }
+                planes
+            };
+            cells.push(Cell {
+                name,
+                planes,
+                objects: Vec::new(),
+            });
+        }
+        let find = |n: &str, span: &Range<usize>| {
+            cells
+                .iter()
+                .position(|c| c.name == n)
+                .map(|i| i as u32)
+                .ok_or_else(|| self.error(span, format!("no [[cell]] named \"{n}\"")))
+        };
+        let mut portals = Vec::new();
+        for spec in &file.portals {
+            let p = spec.get_ref();
+            let [a, b] = p.cells.get_ref();
+            let cs = [find(a, &p.cells.span())?, find(b, &p.cells.span())?];
+            if cs[0] == cs[1] {
+                return Err(self.error(
+                    &p.cells.span(),
+                    format!("a portal from cell \"{a}\" to itself"),
+                ));
+            }
+            let polygon: Vec<DVec3> = p
+                .polygon
+                .get_ref()
+                .iter()
+                .map(|v| DVec3::from_array(*v))
+                .collect();
+            if polygon.len() < 3 || !polygon.iter().all(|v| v.is_finite()) {
+                return Err(self.error(
+                    &p.polygon.span(),
+                    "a portal polygon needs at least 3 finite vertices",
+                ));
+            }
+            portals.push(Portal { cells: cs, polygon });
+        }
+        let mut graph = CellGraph::new(cells, portals);
+        assign_objects(&mut graph, scene);
+        for (k, spec) in file.objects.iter().enumerate() {
+            let Some(names) = &spec.get_ref().cells else {
+                continue;
+            };
+            let mut ids = Vec::new();
+            for n in names.get_ref() {
+                ids.push(find_in(&graph, n).ok_or_else(|| {
+                    self.error(&names.span(), format!("no [[cell]] named \"{n}\""))
+                })?);
+            }
+            for cell in &mut graph.cells {
+                cell.objects.retain(|o| !table_objects[k].contains(o));
+            }
+            for id in ids {
+                graph.cells[id].objects.extend(&table_objects[k]);
+            }
+        }
+        for cell in &mut graph.cells {
+            cell.objects.sort_unstable();
+            cell.objects.dedup();
+        }
+        let report = graph.diagnose(Some(scene));
+        if let Some(issue) = report.errors().next() {
+            let span = match issue.kind {
+                CellIssueKind::PortalOffBoundary { portal, .. }
+                | CellIssueKind::DegeneratePortal { portal }
+                | CellIssueKind::NonPlanarPortal { portal, .. }
+                | CellIssueKind::NonConvexPortal { portal }
+                | CellIssueKind::BadPortalCells { portal } => file.portals[portal].span(),
+                CellIssueKind::OpenCell { cell }
+                | CellIssueKind::EmptyCell { cell }
+                | CellIssueKind::Leak { cell, .. }
+                | CellIssueKind::BadObject { cell, .. }
+                | CellIssueKind::ObjectOutside { cell, .. }
+                | CellIssueKind::NoGeometry { cell } => file.cells[cell].span(),
+                CellIssueKind::Overlap { b, .. } => file.cells[b].span(),
+            };
+            return Err(self.error(&span, issue.message.clone()));
+        }
+        for w in report.warnings() {
+            scene.report_mut().messages.push(w.message.clone());
+        }
+        scene.set_cells(Some(Arc::new(graph)));
+        Ok(())
     }
 
     /// Adds the faces and vertices a table places to the totals, refusing totals over
@@ -829,4 +1054,8 @@ fn with_reference(e: Error, reference: &str) -> Error {
         },
         other => other,
     }
+}
+
+fn find_in(graph: &crate::cull::portals::CellGraph, name: &str) -> Option<usize> {
+    graph.cells.iter().position(|c| c.name == name)
 }
