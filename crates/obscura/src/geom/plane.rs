@@ -206,6 +206,18 @@ impl Plane {
         self.evaluate(p) / self.normal.length()
     }
 
+    /// [`Plane::signed_distance`] of many points, the normal's length computed once
+    /// (the same bits for every point): for the loops over a polygon's vertices, where
+    /// a square root per vertex cost the BSP build 9 %.
+    #[inline]
+    pub fn signed_distances<I>(&self, points: I) -> impl Iterator<Item = f64>
+    where
+        I: IntoIterator<Item = DVec3>,
+    {
+        let len = self.normal.length();
+        points.into_iter().map(move |p| self.evaluate(p) / len)
+    }
+
     /// The same plane with a unit normal.
     #[must_use]
     pub fn normalized(&self) -> Self {
@@ -242,7 +254,7 @@ impl Plane {
     /// an index list, say).
     #[must_use]
     pub fn classify_points(&self, points: impl IntoIterator<Item = DVec3>, eps: f64) -> PlaneSide {
-        PlaneSide::of_distances(points.into_iter().map(|p| self.signed_distance(p)), eps)
+        PlaneSide::of_distances(self.signed_distances(points), eps)
     }
 
     /// Where the segment `a`-`b` meets the plane, as the parameter `t` of `a + t(b-a)`;

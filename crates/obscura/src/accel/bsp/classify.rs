@@ -33,20 +33,23 @@ impl BspTree {
         let eps = self.pair_eps(f, eps);
         // Most fragments are far from the plane: their bounding sphere decides without
         // reading the vertices (with a margin far above rounding).
+        // The sphere's centre first, then the vertices: one square root for all.
         let [cx, cy, cz, r] = self.spheres[f as usize];
-        let d = plane.signed_distance(DVec3::new(cx, cy, cz));
+        let frag = &self.fragments[f as usize];
+        let mut distances = plane.signed_distances(
+            std::iter::once(DVec3::new(cx, cy, cz)).chain(
+                self.fragment_indices(frag)
+                    .iter()
+                    .map(|&v| self.local[v as usize]),
+            ),
+        );
+        let d = distances.next().expect("the centre");
         if d - r > eps + self.slack {
             return PlaneSide::Front;
         }
         if d + r < -eps - self.slack {
             return PlaneSide::Back;
         }
-        let frag = &self.fragments[f as usize];
-        plane.classify_points(
-            self.fragment_indices(frag)
-                .iter()
-                .map(|&v| self.local[v as usize]),
-            eps,
-        )
+        PlaneSide::of_distances(distances, eps)
     }
 }
