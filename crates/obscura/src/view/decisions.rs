@@ -8,6 +8,13 @@
 //! them; the ray casters and the BSP read them directly and never pay for clipped
 //! polygons. No algorithm re-derives them.
 //!
+//! The back faces are decided by one function (`is_back_face`), at one of two moments:
+//! on the first call of [`View::back_facing`] (cached), or, for a view turned into
+//! polygons before anyone asked, inside the face pass as it reaches each polygon. The
+//! second keeps the z-buffer's path to one traversal of the faces and no per-polygon
+//! flags, as fast as before the decisions moved here (`docs/performance.md`, "Issue
+//! 22: README figures beside the old build").
+//!
 //! Scene polygons are numbered in scene order: object by object, each object's mesh
 //! polygons in order ([`View::polygon_base`]); the index's world triangles
 //! ([`crate::accel::triangles::SceneTriangles`]) number them the same way.
@@ -76,7 +83,8 @@ pub struct View<'s> {
 
 impl<'s> View<'s> {
     /// Decides what a camera sees of a scene: objects culled by the frustum, vertices
-    /// of the kept objects taken to eye, clip and screen space, back faces marked.
+    /// of the kept objects taken to eye, clip and screen space (back faces are decided
+    /// when first asked for, or by the face pass).
     /// Errors: an invalid viewport or camera (see [`Camera::validate_for`]), or a view
     /// over the memory budget of `options` (its vertices and polygons, estimated
     /// before anything is allocated).
