@@ -33,23 +33,22 @@ impl BspTree {
         let eps = self.pair_eps(f, eps);
         // Most fragments are far from the plane: their bounding sphere decides without
         // reading the vertices (with a margin far above rounding).
-        // The sphere's centre first, then the vertices: one square root for all.
+        // One square root (the normal's length) for the centre and all the vertices.
+        let distance = plane.signed_distance_fn();
         let [cx, cy, cz, r] = self.spheres[f as usize];
-        let frag = &self.fragments[f as usize];
-        let mut distances = plane.signed_distances(
-            std::iter::once(DVec3::new(cx, cy, cz)).chain(
-                self.fragment_indices(frag)
-                    .iter()
-                    .map(|&v| self.local[v as usize]),
-            ),
-        );
-        let d = distances.next().expect("the centre");
+        let d = distance(DVec3::new(cx, cy, cz));
         if d - r > eps + self.slack {
             return PlaneSide::Front;
         }
         if d + r < -eps - self.slack {
             return PlaneSide::Back;
         }
-        PlaneSide::of_distances(distances, eps)
+        let frag = &self.fragments[f as usize];
+        PlaneSide::of_distances(
+            self.fragment_indices(frag)
+                .iter()
+                .map(|&v| distance(self.local[v as usize])),
+            eps,
+        )
     }
 }
