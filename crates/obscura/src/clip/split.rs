@@ -71,7 +71,7 @@ pub fn split_polygon(points: &[DVec3], plane: &Plane, eps: f64) -> Split {
     }
     // A negative or NaN tolerance would make a vertex both sides of the plane.
     let eps = if eps > 0.0 { eps } else { 0.0 };
-    let dist: Vec<f64> = points.iter().map(|&p| plane.signed_distance(p)).collect();
+    let dist: Vec<f64> = plane.signed_distances(points.iter().copied()).collect();
     let side = |d: f64| PlaneSide::of_distance(d, eps);
     match PlaneSide::of_distances(dist.iter().copied(), eps) {
         PlaneSide::On => {

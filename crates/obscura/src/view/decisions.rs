@@ -8,10 +8,18 @@
 //! them; the ray casters and the BSP read them directly and never pay for clipped
 //! polygons. No algorithm re-derives them.
 //!
+//! The back faces are decided by one function (`is_back_face`), at one of two moments:
+//! on the first call of [`View::back_facing`] (cached), or, for a view turned into
+//! polygons before anyone asked, inside the face pass as it reaches each polygon. The
+//! second keeps the z-buffer's path to one traversal of the faces and no per-polygon
+//! flags, as fast as before the decisions moved here (`docs/performance.md`, "Issue
+//! 22: README figures beside the old build").
+//!
 //! Scene polygons are numbered in scene order: object by object, each object's mesh
 //! polygons in order ([`View::polygon_base`]); the index's world triangles
 //! ([`crate::accel::triangles::SceneTriangles`]) number them the same way.
 
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::DVec3;
@@ -56,21 +64,27 @@ pub struct View<'s> {
     pub(super) codes: Vec<u8>,
     /// Per scene object, its first scene polygon; then the total.
     pub(super) polygon_base: Vec<u32>,
-    /// Per scene polygon, whether it is a culled back face (false for objects not kept).
-    pub(super) back_facing: Vec<bool>,
+    /// Per scene polygon, whether it is a culled back face (false for objects not kept):
+    /// decided on first request ([`View::back_facing`]), or at once for a view with an
+    /// occlusion stage. A view turned into polygons before anyone asks decides its back
+    /// faces inside the face pass instead, with the same function ([`is_back_face`]),
+    /// and keeps no flags: one traversal of the faces, not two.
+    pub(super) back_facing: OnceLock<Vec<bool>>,
     /// Per scene polygon, whether the face pass skips it: a back face or a face the
     /// occlusion stage culled; `None` when nothing but back faces is skipped.
     pub(super) skip: Option<Vec<bool>>,
     /// The occlusion stage's decisions, if the view was made with one.
     pub(super) culling: Option<crate::cull::occlusion::Culling>,
-    /// Time of the back-face pass, reported with the face pass's stage.
+    /// Time of the back-face pass run by [`View::new`] (with an occlusion stage only),
+    /// reported with the face pass's stage.
     pub(super) back_face_ms: f64,
     pub(super) stats: PipelineStats,
 }
 
 impl<'s> View<'s> {
     /// Decides what a camera sees of a scene: objects culled by the frustum, vertices
-    /// of the kept objects taken to eye, clip and screen space, back faces marked.
+    /// of the kept objects taken to eye, clip and screen space (back faces are decided
+    /// when first asked for, or by the face pass).
     /// Errors: an invalid viewport or camera (see [`Camera::validate_for`]), or a view
     /// over the memory budget of `options` (its vertices and polygons, estimated
     /// before anything is allocated).
@@ -156,29 +170,30 @@ impl<'s> View<'s> {
             total += o.mesh.polygon_count() as u32;
         }
         polygon_base.push(total);
-        let back_facing = back_faces(
-            &BackFaceInput {
-                scene,
-                visible: &visible,
-                bases: &bases,
-                vertices: &vertices,
-                polygon_base: &polygon_base,
-                t: &t,
-                mode: options.backface,
-            },
-            threads,
-        );
+        // Back faces: decided here only when the occlusion stage's mask is merged with
+        // them; otherwise on first request, or fused into the face pass.
+        let back_facing = OnceLock::new();
         let skip = culling.as_ref().and_then(|c| {
             let any = visible.iter().any(|&(k, _)| {
                 let (a, b) = (polygon_base[k] as usize, polygon_base[k + 1] as usize);
                 c.faces[a..b].iter().any(|&f| f)
             });
             any.then(|| {
-                back_facing
-                    .iter()
-                    .zip(&c.faces)
-                    .map(|(&b, &f)| b || f)
-                    .collect()
+                let back = back_faces(
+                    &BackFaceInput {
+                        scene,
+                        visible: &visible,
+                        bases: &bases,
+                        vertices: &vertices,
+                        polygon_base: &polygon_base,
+                        t: &t,
+                        mode: options.backface,
+                    },
+                    threads,
+                );
+                let skip = back.iter().zip(&c.faces).map(|(&b, &f)| b || f).collect();
+                let _ = back_facing.set(back);
+                skip
             })
         });
         let back_face_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -265,14 +280,30 @@ impl<'s> View<'s> {
     /// back-face mode leaves alone.
     #[must_use]
     pub fn back_facing(&self) -> &[bool] {
-        &self.back_facing
+        self.back_facing.get_or_init(|| {
+            back_faces(
+                &BackFaceInput {
+                    scene: self.scene,
+                    visible: &self.visible,
+                    bases: &self.bases,
+                    vertices: &self.vertices,
+                    polygon_base: &self.polygon_base,
+                    t: &self.transform,
+                    mode: self.options.backface,
+                },
+                passes::thread_count(),
+            )
+        })
     }
 
     /// Per scene polygon, whether the face pass skips it: a back face, or a face the
     /// occlusion stage culled ([`Self::new_culled`]).
     #[must_use]
     pub fn skipped_polygons(&self) -> &[bool] {
-        self.skip.as_deref().unwrap_or(&self.back_facing)
+        match &self.skip {
+            Some(skip) => skip,
+            None => self.back_facing(),
+        }
     }
 
     /// The occlusion stage's decisions, for a view made by [`Self::new_culled`].
@@ -365,21 +396,37 @@ fn mark(input: &BackFaceInput<'_>, slot: usize, first: usize, out: &mut [bool]) 
     let o = &input.scene.objects()[k];
     let base = input.bases[slot];
     let (mstarts, mindices, _) = o.mesh.polygon_arrays();
-    let (vertices, t) = (input.vertices, input.t);
+    let vertices = input.vertices;
     let eye = |i: u32| vertices[(base + i) as usize].eye;
     let mut pts: Vec<DVec3> = Vec::new();
     for (i, flag) in out.iter_mut().enumerate() {
         let p = first + i;
         let poly = &mindices[mstarts[p] as usize..mstarts[p + 1] as usize];
-        let normal = if let &[a, b, c] = poly {
-            let (a, b, c) = (eye(a), eye(b), eye(c));
-            (b - a).cross(c - a)
-        } else {
-            pts.clear();
-            pts.extend(poly.iter().map(|&i| eye(i)));
-            newell_normal(&pts)
-        };
-        let normal = if o.mirrored { -normal } else { normal };
-        *flag = t.is_back_facing_eye(normal, eye(poly[0]));
+        *flag = is_back_face(o.mirrored, poly, eye, input.t, &mut pts);
     }
+}
+
+/// Whether a polygon (vertex indices `poly`, eye positions by `eye`) of an object the
+/// back-face mode culls is a back face: its eye-space normal (the cross product for
+/// triangles, Newell's for larger polygons, flipped by mirroring) against the eye,
+/// edge-on counting as back ([`ViewTransform::is_back_facing_eye`]). `pts` is scratch.
+/// The one definition: [`View::back_facing`] and the fused face pass both call it.
+#[inline(always)]
+pub(super) fn is_back_face(
+    mirrored: bool,
+    poly: &[u32],
+    eye: impl Fn(u32) -> DVec3,
+    t: &ViewTransform,
+    pts: &mut Vec<DVec3>,
+) -> bool {
+    let normal = if let &[a, b, c] = poly {
+        let (a, b, c) = (eye(a), eye(b), eye(c));
+        (b - a).cross(c - a)
+    } else {
+        pts.clear();
+        pts.extend(poly.iter().map(|&i| eye(i)));
+        newell_normal(pts)
+    };
+    let normal = if mirrored { -normal } else { normal };
+    t.is_back_facing_eye(normal, eye(poly[0]))
 }

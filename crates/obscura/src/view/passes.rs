@@ -1,6 +1,6 @@
 //! The two passes of [`prepare`](super::prepare): vertices (transform, outcode, screen
-//! position) and faces (the view's back faces skipped, outcode rejection, clipping,
-//! emission; the back faces are marked once by `View::new`), each
+//! position) and faces (the view's back faces skipped, or decided here by its rule
+//! when not asked for before; outcode rejection, clipping, emission), each
 //! serial or, with the `parallel` feature and more than one thread, on chunks in
 //! parallel. Both orders of work give the same arrays: chunks are contiguous runs of
 //! vertices or faces, concatenated in order.
@@ -23,9 +23,11 @@ use std::mem::MaybeUninit;
 
 use glam::{DVec3, DVec4};
 
+use super::decisions::is_back_face;
 use super::{ModelView, ViewTransform, ViewVertex};
 use crate::clip::outcode_homogeneous;
 use crate::clip::sutherland_hodgman::{ClipEyeVertex, clip_polygon_homogeneous_masked};
+use crate::cull::backface::BackfaceMode;
 use crate::scene::Scene;
 
 /// Threads available: rayon's current pool with the `parallel` feature, else 1.
@@ -321,8 +323,12 @@ pub(super) struct FaceContext<'a> {
     pub t: &'a ViewTransform,
     /// Per scene object, its first scene polygon.
     pub polygon_base: &'a [u32],
-    /// The view's back faces, per scene polygon.
-    pub back_facing: &'a [bool],
+    /// The faces to skip, per scene polygon, when the view has decided them already
+    /// (its back faces, with any faces the occlusion stage culled); `None`: the pass
+    /// decides the back faces itself, by the view's rule (`decisions::is_back_face`).
+    pub skip: Option<&'a [bool]>,
+    /// The view's back-face mode, for a pass that decides.
+    pub backface: BackfaceMode,
 }
 
 /// The polygons the face pass emits, and its counts per stage.
@@ -348,6 +354,8 @@ pub(super) struct FaceOutput {
 /// Scratch vectors of the clipper.
 #[derive(Default)]
 struct Scratch {
+    /// Eye positions of a polygon of more than 3 vertices, for its normal.
+    eye: Vec<DVec3>,
     input: Vec<ClipEyeVertex>,
     out: Vec<ClipEyeVertex>,
     scratch: Vec<ClipEyeVertex>,
@@ -367,13 +375,20 @@ fn faces_of(
     let (k, inside) = ctx.visible[slot];
     let o = &ctx.scene.objects()[k];
     let base = ctx.bases[slot];
-    let back_facing = &ctx.back_facing[ctx.polygon_base[k] as usize..];
+    let skip = ctx.skip.map(|s| &s[ctx.polygon_base[k] as usize..]);
+    let cull = ctx.backface.applies_to(o.closed);
     let (mstarts, mindices, mfaces) = o.mesh.polygon_arrays();
     let (vertices, codes, t) = (ctx.vertices, ctx.codes, ctx.t);
+    let eye = |i: u32| vertices[(base + i) as usize].eye;
     for p in polygons {
         let poly = &mindices[mstarts[p] as usize..mstarts[p + 1] as usize];
-        // The view's decision (`View::back_facing`), made once for every algorithm.
-        if back_facing[p] {
+        // The view's decision (`View::back_facing`): read if made, else made here by
+        // the same function, fused with this pass so the faces are traversed once.
+        let skipped = match skip {
+            Some(skip) => skip[p],
+            None => cull && is_back_face(o.mirrored, poly, eye, t, &mut s.eye),
+        };
+        if skipped {
             continue;
         }
         out.front += 1;

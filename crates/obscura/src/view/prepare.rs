@@ -94,7 +94,7 @@ impl<'s> View<'s> {
     /// Builds the screen polygons of the faces this view keeps: faces wholly outside a
     /// frustum plane by their vertices' outcodes rejected, those crossing a plane
     /// clipped (Sutherland-Hodgman), the rest emitted as they are. Back faces are the
-    /// view's ([`View::back_facing`]). Infallible: [`View::new`] held the polygons to
+    /// view's ([`View::back_facing`]), decided in this pass if not asked for before. Infallible: [`View::new`] held the polygons to
     /// the budget already.
     #[must_use]
     pub fn into_prepared(mut self) -> PreparedView<'s> {
@@ -114,7 +114,14 @@ impl<'s> View<'s> {
             codes: &self.codes,
             t: &self.transform,
             polygon_base: &self.polygon_base,
-            back_facing: self.skip.as_deref().unwrap_or(&self.back_facing),
+            // Decided already (asked for, or merged with an occlusion stage's mask):
+            // read; else decided inside the face pass, which keeps no flags (a later
+            // `back_facing()` decides them again by the same function).
+            skip: self
+                .skip
+                .as_deref()
+                .or(self.back_facing.get().map(Vec::as_slice)),
+            backface: self.options.backface,
         };
         let out = passes::process_faces(&ctx, face_total, threads);
         self.vertices.extend_from_slice(&out.clipped_vertices);
@@ -163,10 +170,10 @@ impl<'s> View<'s> {
 /// ```
 ///
 /// # Performance
-/// Three passes over the data: one over vertices (transform, outcode, screen
-/// position), one over the kept objects' faces that marks the back faces, and one
-/// that rejects by outcodes, clips and emits in one go, so no intermediate list of
-/// faces is built. The face stages keep their own counts; their time (back faces
+/// Two passes over the data: one over vertices (transform, outcode, screen
+/// position), and one over the kept objects' faces that decides the back faces
+/// (the view's rule, [`View::back_facing`]), rejects by outcodes, clips and emits in
+/// one go, so no intermediate list of faces is built. The face stages keep their own counts; their time (back faces
 /// included) is reported once, in the back-face stage, whose name says so.
 /// Clip-space coordinates are not stored: the few polygons that cross a plane
 /// recompute them from the eye-space vertices, with the same function, hence the same

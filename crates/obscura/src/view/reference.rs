@@ -214,7 +214,7 @@ pub(super) fn prepare_reference<'s>(
         vertices,
         codes: Vec::new(),
         polygon_base,
-        back_facing,
+        back_facing: std::sync::OnceLock::from(back_facing),
         skip: None,
         culling: None,
         back_face_ms: 0.0,

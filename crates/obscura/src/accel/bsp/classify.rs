@@ -33,8 +33,10 @@ impl BspTree {
         let eps = self.pair_eps(f, eps);
         // Most fragments are far from the plane: their bounding sphere decides without
         // reading the vertices (with a margin far above rounding).
+        // One square root (the normal's length) for the centre and all the vertices.
+        let distance = plane.signed_distance_fn();
         let [cx, cy, cz, r] = self.spheres[f as usize];
-        let d = plane.signed_distance(DVec3::new(cx, cy, cz));
+        let d = distance(DVec3::new(cx, cy, cz));
         if d - r > eps + self.slack {
             return PlaneSide::Front;
         }
@@ -42,10 +44,10 @@ impl BspTree {
             return PlaneSide::Back;
         }
         let frag = &self.fragments[f as usize];
-        plane.classify_points(
+        PlaneSide::of_distances(
             self.fragment_indices(frag)
                 .iter()
-                .map(|&v| self.local[v as usize]),
+                .map(|&v| distance(self.local[v as usize])),
             eps,
         )
     }

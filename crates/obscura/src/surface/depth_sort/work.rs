@@ -258,9 +258,8 @@ impl WorkSet {
             min: f64::INFINITY,
             max: f64::NEG_INFINITY,
         };
-        for v in self.vertices(i) {
-            // The distance `split_polygon` splits by, so tests and splits agree.
-            let d = plane.signed_distance(v.eye);
+        // The distance `split_polygon` splits by, so tests and splits agree.
+        for d in plane.signed_distances(self.vertices(i).iter().map(|v| v.eye)) {
             r.min = r.min.min(d);
             r.max = r.max.max(d);
         }
