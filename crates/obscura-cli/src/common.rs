@@ -17,7 +17,8 @@ use obscura::{Camera, Error, PrepareOptions, Projection, Result, Scene, Viewport
 #[derive(Args, Debug, Clone)]
 pub struct ViewArgs {
     /// A mesh file (.obj .gltf .glb .stl .ply), a scene file (.toml) or demo:NAME
-    /// (default, seed-task, cube, sphere, city, triangles). Without it, demo:default.
+    /// (default, seed-task, cube, sphere, city, blocks, triangles, level, level-grid,
+    /// cells5). Without it, demo:default.
     #[arg(value_name = "SCENE", value_parser = clap::builder::OsStringValueParser::new().try_map(parse_scene))]
     pub scene: Option<String>,
     /// Image size in pixels, WIDTHxHEIGHT (each side at most 16384).

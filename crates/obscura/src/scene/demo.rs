@@ -9,7 +9,7 @@
 //! | `sphere` | a UV sphere of about a million triangles (benchmarks) | 998,000 |
 //! | `city` | 10,000 boxes on a ground plane | 120,001 |
 //! | `triangles` | 10,000 large overlapping triangles (z-buffer fill-rate benchmark) | 10,000 |
-//! | `level` | a level of 25 cells (rooms, corridors, doors, furniture) with its cells and portals | ~1k |
+//! | `level` | a level of 35 cells (rooms, corridors, doors, furniture) with its cells and portals | ~1k |
 //! | `level-grid` | a generated level of 100 cells (PVS speed) | ~4k |
 //! | `cells5` | the seed's five cells A..E of the PVS example ([`crate::cull::portals::seed_example`]) | ~60 |
 //!
@@ -390,7 +390,11 @@ pub fn overlapping_triangles(n: usize, seed: u64) -> Scene {
 /// The seed of [`level`]'s generator.
 const LEVEL_SEED: u64 = 24;
 
-/// The demo level (`demo:level`): 25 cells in a 5 x 5 grid, whose rows alternate rooms
+/// The cells of [`level`] across and deep: 7 x 5 (three rows of rooms, two of
+/// corridors).
+const LEVEL_SIZE: (usize, usize) = (7, 5);
+
+/// The demo level (`demo:level`): 35 cells in a 7 x 5 grid, whose rows alternate rooms
 /// (4 to 7 units a side, with furniture) and corridors (2 deep), joined by doors (a
 /// random spanning tree of the grid plus about a quarter of the other walls), walls 3
 /// high with door holes, floors and ceilings; its cells and portals set on the scene
@@ -398,7 +402,7 @@ const LEVEL_SEED: u64 = 24;
 /// [`level_walk`] walks it.
 #[must_use]
 pub fn level() -> Scene {
-    level_scene(5, 5, LEVEL_SEED)
+    level_scene(LEVEL_SIZE.0, LEVEL_SIZE.1, LEVEL_SEED)
 }
 
 /// A generated level of `n * n` cells (`demo:level-grid` is `level_grid(10)`, 100
@@ -441,7 +445,7 @@ fn level_scene(nx: usize, nz: usize, seed: u64) -> Scene {
 /// cameras (96 views), eyes 1.6 above the floor, always inside a cell.
 #[must_use]
 pub fn level_walk() -> Vec<Camera> {
-    let plan = crate::cull::portals::floorplan::level_plan(5, 5, LEVEL_SEED);
+    let plan = crate::cull::portals::floorplan::level_plan(LEVEL_SIZE.0, LEVEL_SIZE.1, LEVEL_SEED);
     crate::cull::portals::floorplan::plan_walk(&plan, 16, 6)
 }
 

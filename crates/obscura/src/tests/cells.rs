@@ -356,7 +356,7 @@ fn locate_matches_a_linear_scan() {
 fn demo_levels_are_valid_and_the_walk_stays_in_cells() {
     let level = demo::level();
     let graph = level.cells().unwrap();
-    assert_eq!(graph.cells.len(), 25);
+    assert_eq!(graph.cells.len(), 35);
     let report = graph.validate_with_scene(&level).unwrap();
     assert_eq!(report.issues, vec![]);
     assert!(level.objects().len() > 60, "{}", level.objects().len());

@@ -535,7 +535,7 @@ pub fn seed_example() -> (CellGraph, Scene) {
 }
 
 /// A generated level of `nx * nz` cells: a grid of rooms whose odd rows are corridors
-/// (2 deep), every other row rooms of random sizes, doors along a random spanning tree
+/// (3 deep), every other row rooms of random sizes, doors along a random spanning tree
 /// of the grid plus about a quarter of the other walls (corridor pieces always open into
 /// each other), and furniture along the room walls. Deterministic for a `seed`.
 #[must_use]
@@ -550,7 +550,7 @@ pub fn level_plan(nx: usize, nz: usize, seed: u64) -> FloorPlan {
     let mut zs = vec![0.0];
     for j in 0..nz {
         let d = if j % 2 == 1 {
-            2.0
+            3.0
         } else {
             rng.range(4.0, 7.0).round()
         };
@@ -613,7 +613,7 @@ pub fn level_plan(nx: usize, nz: usize, seed: u64) -> FloorPlan {
         if ra != rb {
             parent[ra] = rb;
             open[w] = true;
-        } else if both_corridor || rng.next_f64() < 0.25 {
+        } else if both_corridor || rng.next_f64() < 0.1 {
             open[w] = true;
         }
     }
@@ -626,11 +626,21 @@ pub fn level_plan(nx: usize, nz: usize, seed: u64) -> FloorPlan {
         let len = p.distance(q);
         let both_corridor = a / nx == b / nx && corridor(a / nx);
         let (width, dh) = if both_corridor {
-            (len - 0.4, 2.6)
+            (1.0f64.min(len - 0.4), 2.6)
         } else {
             (1.2f64.min(len - 0.6), 2.2)
         };
-        let start = rng.range(0.3, (len - width - 0.3).max(0.3));
+        // Along a corridor the doors keep to one side and the other in turn (a line
+        // of sight passes two of them, never three); other doors anywhere on the wall.
+        let start = if both_corridor {
+            if (a % nx) % 2 == 0 {
+                0.2
+            } else {
+                len - 0.2 - width
+            }
+        } else {
+            rng.range(0.3, (len - width - 0.3).max(0.3))
+        };
         let dir = (q - p) / len;
         doors.push(Door {
             rooms: [a, b],
