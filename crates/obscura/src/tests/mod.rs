@@ -7,6 +7,7 @@
 mod bsp;
 mod budget;
 mod cross_validation;
+mod cull_buffer;
 mod depth_sort;
 mod hsr_scenes;
 mod octree;
