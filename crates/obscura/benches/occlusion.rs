@@ -20,7 +20,7 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use obscura::cull::buffer::{BufferKind, BufferOptions, OcclusionBuffer};
+use obscura::cull::buffer::{BufferKind, OcclusionBuffer};
 use obscura::cull::occlusion::{CullMethod, CullOptions, Culling};
 use obscura::surface::zbuffer::Kernel;
 use obscura::surface::{Algorithm, RenderOptions};
@@ -108,10 +108,7 @@ fn buffer_frame(name: &str, scene: &Scene, camera: &Camera, runs: usize) {
     let t = ViewTransform::new(camera, vp);
     for kind in [BufferKind::Masked, BufferKind::HierarchicalZ] {
         let mut o = CullOptions::with_method(CullMethod::Buffer);
-        o.buffer = BufferOptions {
-            kind,
-            ..BufferOptions::default()
-        };
+        o.buffer.kind = kind;
         let mut buf = OcclusionBuffer::new();
         let mut last = None;
         let (best, median) = time(runs, || {

@@ -88,7 +88,7 @@ impl MaskedBuffer {
             }
         }
         let _ = kernel;
-        draw_impl(self, tris);
+        draw_impl(Portable, self, tris);
     }
 
     /// The key bound of pixel `(x, y)`: no occluder covering it is farther;
@@ -169,8 +169,53 @@ impl MaskedBuffer {
     }
 }
 
-/// The coverage of one edge over a tile whose corner pixel's value is `e` (already
-/// less its margin), steps `a` (x) and `b` (y).
+/// The lanes an edge's coverage of a tile is computed with: portable scalar code, or
+/// AVX2 (eight pixels of a tile row at once). Both run the same `f32` operations in the
+/// same order (`row + a * dx`, then `> 0`), so they give the same bits.
+trait Lanes: Copy {
+    /// The coverage of one edge over a tile whose corner pixel's value is `e`
+    /// (already less its margin), steps `a` (x) and `b` (y).
+    fn edge_mask(self, e: f32, a: f32, b: f32) -> u32;
+}
+
+/// The portable lanes.
+#[derive(Clone, Copy)]
+struct Portable;
+
+impl Lanes for Portable {
+    #[inline(always)]
+    fn edge_mask(self, e: f32, a: f32, b: f32) -> u32 {
+        edge_mask(e, a, b)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Lanes for crate::cpu::Avx2 {
+    #[inline(always)]
+    fn edge_mask(self, e: f32, a: f32, b: f32) -> u32 {
+        use std::arch::x86_64::{
+            _CMP_GT_OQ, _mm256_add_ps, _mm256_cmp_ps, _mm256_movemask_ps, _mm256_mul_ps,
+            _mm256_set1_ps, _mm256_setr_ps, _mm256_setzero_ps,
+        };
+        // SAFETY: a value of `Avx2` exists only on a processor with AVX2
+        // (`cpu::Avx2::new` checks it); these are arithmetic intrinsics on registers.
+        unsafe {
+            let dx = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
+            let ax = _mm256_mul_ps(_mm256_set1_ps(a), dx);
+            let zero = _mm256_setzero_ps();
+            let mut m = 0u32;
+            for dy in 0..TH {
+                let row = e + b * dy as f32;
+                let lanes = _mm256_add_ps(_mm256_set1_ps(row), ax);
+                let bits = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(lanes, zero)) as u32;
+                m |= bits << (dy * TW);
+            }
+            m
+        }
+    }
+}
+
+/// The coverage of one edge over a tile (see [`Lanes::edge_mask`]), portable.
 #[inline(always)]
 fn edge_mask(e: f32, a: f32, b: f32) -> u32 {
     let mut m = 0u32;
@@ -195,7 +240,7 @@ const EDGE_ROUNDING: f64 = 1.0 / (1u64 << 18) as f64;
 
 /// Rasterizes one set-up triangle.
 #[inline(always)]
-fn draw_setup(buf: &mut MaskedBuffer, s: &Setup) {
+fn draw_setup<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, s: &Setup) {
     let (tx0, tx1) = (s.x0 as usize / TW, s.x1 as usize / TW);
     let (ty0, ty1) = (s.y0 as usize / TH, s.y1 as usize / TH);
     let af = s.a.map(|a| a as f32);
@@ -224,7 +269,7 @@ fn draw_setup(buf: &mut MaskedBuffer, s: &Setup) {
                     empty = true;
                     break;
                 }
-                mask &= edge_mask(f32_down(e), af[k], bf[k]);
+                mask &= lanes.edge_mask(f32_down(e), af[k], bf[k]);
             }
             if empty || mask == 0 {
                 continue;
@@ -236,25 +281,25 @@ fn draw_setup(buf: &mut MaskedBuffer, s: &Setup) {
 }
 
 #[inline(always)]
-fn draw_impl(buf: &mut MaskedBuffer, tris: &[Tri]) {
+fn draw_impl<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, tris: &[Tri]) {
     let (w, h, r) = (buf.width, buf.height, buf.r);
     for t in tris {
         if let Some(s) = setup(t, r, w, h) {
-            draw_setup(buf, &s);
+            draw_setup(lanes, buf, &s);
         }
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn draw_avx2(_: crate::cpu::Avx2, buf: &mut MaskedBuffer, tris: &[Tri]) {
-    draw_impl(buf, tris);
+fn draw_avx2(cpu: crate::cpu::Avx2, buf: &mut MaskedBuffer, tris: &[Tri]) {
+    draw_impl(cpu, buf, tris);
 }
 
 /// The portable build of the drawing (for the tests that compare kernels).
 #[cfg(test)]
 pub(crate) fn draw_portable(buf: &mut MaskedBuffer, tris: &[Tri]) {
-    draw_impl(buf, tris);
+    draw_impl(Portable, buf, tris);
 }
 
 #[cfg(test)]

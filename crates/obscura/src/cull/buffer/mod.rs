@@ -358,13 +358,14 @@ impl OcclusionBuffer {
             }
             used_units += 1;
             let o = &scene.objects()[u.object as usize];
+            let mv = t.model_view(&o.transform);
             if u.cluster == u32::MAX {
                 for p in 0..o.mesh.polygon_count() as u32 {
-                    self.emit(t, o, p);
+                    self.emit(t, &mv, o, p);
                 }
             } else {
                 for &p in clusters.polygons(u.cluster as usize) {
-                    self.emit(t, o, p);
+                    self.emit(t, &mv, o, p);
                 }
             }
         }
@@ -431,8 +432,13 @@ impl OcclusionBuffer {
 
     /// Appends the triangles of polygon `p` of object `o` to the occluders, if it
     /// faces the viewer: clipped to the near plane, projected to buffer coordinates.
-    fn emit(&mut self, t: &ViewTransform, o: &crate::scene::Object, p: u32) {
-        let mv = t.model_view(&o.transform);
+    fn emit(
+        &mut self,
+        t: &ViewTransform,
+        mv: &crate::view::ModelView,
+        o: &crate::scene::Object,
+        p: u32,
+    ) {
         let pos = o.mesh.positions();
         self.eye.clear();
         self.eye.extend(
