@@ -55,8 +55,13 @@ impl MaskedBuffer {
         self.z1.resize(n, f32::NEG_INFINITY);
         self.pad.clear();
         self.pad.resize(n, 0);
+        // Only the last column and row of tiles hold pixels outside the buffer.
+        let border = |t: usize, tiles: usize| t + 1 == tiles;
         for ty in 0..self.tiles_y {
             for tx in 0..self.tiles_x {
+                if !border(tx, self.tiles_x) && !border(ty, self.tiles_y) {
+                    continue;
+                }
                 let mut m = 0u32;
                 for dy in 0..TH {
                     for dx in 0..TW {

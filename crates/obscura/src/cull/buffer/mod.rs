@@ -129,6 +129,8 @@ struct Unit {
     object: u32,
     cluster: u32,
     area: f64,
+    /// The nearest key of its box (`+inf` when it crosses the near plane).
+    key: f32,
 }
 
 /// The occlusion buffer and its scratch space, reused frame to frame (no allocation
@@ -326,24 +328,29 @@ impl OcclusionBuffer {
             if o.mesh.polygon_count() == 0 || c.objects[k].is_some() {
                 continue;
             }
-            let area = |b: &Aabb| self.project_box(t, b).map_or(full, |r| r.area);
+            let area = |b: &Aabb| {
+                self.project_box(t, b)
+                    .map_or((full, f32::INFINITY), |r| (r.area, r.key))
+            };
             if options.clusters {
                 for cl in clusters.of_object(k) {
                     if c.clusters[cl].is_none() {
-                        let a = area(clusters.bounds(cl));
+                        let (a, key) = area(clusters.bounds(cl));
                         units.push(Unit {
                             object: k as u32,
                             cluster: cl as u32,
                             area: a,
+                            key,
                         });
                     }
                 }
             } else {
-                let a = area(&o.bounds);
+                let (a, key) = area(&o.bounds);
                 units.push(Unit {
                     object: k as u32,
                     cluster: u32::MAX,
                     area: a,
+                    key,
                 });
             }
         }
@@ -352,10 +359,24 @@ impl OcclusionBuffer {
         self.tris.clear();
         let budget = bo.occluder_triangles as usize;
         let mut used_units = 0usize;
+        // The units within the budget, then drawn nearest first: a tile filled by
+        // near occluders refuses the farther ones at once (MSOC draws front to back for
+        // the same reason).
+        let mut selected = 0usize;
+        let mut triangles = 0usize;
         for u in &units {
-            if self.tris.len() >= budget || u.area < 2.0 {
+            if triangles >= budget || u.area < 2.0 {
                 break;
             }
+            selected += 1;
+            triangles += if u.cluster == u32::MAX {
+                scene.objects()[u.object as usize].mesh.triangle_count()
+            } else {
+                clusters.triangles(u.cluster as usize) as usize
+            };
+        }
+        units[..selected].sort_unstable_by(|a, b| b.key.total_cmp(&a.key));
+        for u in &units[..selected] {
             used_units += 1;
             let o = &scene.objects()[u.object as usize];
             let mv = t.model_view(&o.transform);
