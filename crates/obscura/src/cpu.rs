@@ -239,6 +239,11 @@ mod tests {
         ),
         ("view/passes.rs", include_str!("view/passes.rs")),
         ("bench_support.rs", include_str!("bench_support.rs")),
+        (
+            "cull/buffer/masked.rs",
+            include_str!("cull/buffer/masked.rs"),
+        ),
+        ("cull/buffer/hiz.rs", include_str!("cull/buffer/hiz.rs")),
     ];
 
     /// Every `#[target_feature(enable = "...")]` in `src`: its features, and the

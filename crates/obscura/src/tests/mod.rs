@@ -9,6 +9,7 @@ mod budget;
 mod cells;
 mod cross_validation;
 mod cull;
+mod cull_buffer;
 mod depth_sort;
 mod hsr_scenes;
 mod occluders;

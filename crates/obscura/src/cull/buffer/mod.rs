@@ -5,12 +5,53 @@
 //! Culling", High Performance Graphics 2016), or a hierarchical z-buffer (Greene, Kass
 //! and Miller, "Hierarchical Z-buffer visibility", SIGGRAPH 1993).
 //!
-//! STUB of the contract: culls nothing yet.
+//! The pipeline of one frame ([`OcclusionBuffer::cull`]):
+//! 1. **Units**: the objects the frustum kept, or (with [`CullOptions::clusters`]) their
+//!    clusters the frustum kept. Each unit's world box is projected: its screen
+//!    rectangle, expanded outward to whole pixels (every pixel whose sample the box
+//!    could reach), and its nearest depth key, rounded towards nearer. A box with a
+//!    corner at or in front of the near plane has neither and is never culled.
+//! 2. **Occluders**: units ranked by the area of their screen rectangle (a box that
+//!    crosses the near plane ranks first), taken in that order until
+//!    [`BufferOptions::occluder_triangles`] triangles; of each, the front-facing
+//!    polygons only (back faces may be culled by the view, so they are no proof of
+//!    occlusion), clipped to the near plane, cut into triangles in a fan (the
+//!    polygons are convex).
+//! 3. **The buffer**: the triangles rasterized conservatively ([`raster`]): a pixel
+//!    counts covered only if every viewport sample it stands for lies inside the
+//!    triangle, and its key is the triangle's farthest over the tile (masked) or the
+//!    pixel (hierarchical), rounded towards farther. So wherever the buffer holds key
+//!    `z`, the z-buffer of the whole scene draws something at least as near as `z`.
+//! 4. **Tests**: objects, then clusters of objects kept: a box whose nearest key is
+//!    behind the buffer at every pixel of its rectangle is culled
+//!    ([`CullReason::Buffer`]).
+//!
+//! Why no unit is culled by its own faces, and why culling never changes the picture:
+//! the nearest key of a unit's box is at least every key of its faces, and a box is
+//! culled only where the buffer is strictly nearer than that, so at every pixel the
+//! occluder that sets the buffer's key belongs to a unit that is not culled (were it
+//! culled, the buffer there would be nearer than its own faces). That unit's face is
+//! drawn, nearer than anything in the culled box.
+//!
+//! The kernels that rasterize run portable or compiled for AVX2
+//! ([`BufferOptions::kernel`]); they run the same operations in the same order, so
+//! they leave the same bits (the tests compare them).
 
-use super::occlusion::{CullOptions, Culling};
+pub mod hiz;
+pub mod masked;
+pub mod raster;
+
+use std::time::Instant;
+
+use glam::DVec3;
+
+use super::occlusion::{BufferImage, CullOptions, CullReason, Culling};
 use crate::Result;
+use crate::cpu::Kernel;
+use crate::geom::Aabb;
 use crate::index::SceneIndex;
 use crate::view::ViewTransform;
+use raster::{DEPTH_MARGIN, Tri, f32_up};
 
 /// Which occlusion buffer.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -31,6 +72,14 @@ pub struct BufferOptions {
     pub kind: BufferKind,
     /// Its resolution as a divisor of the viewport's (1: full resolution).
     pub divisor: u32,
+    /// Fill [`Culling::buffer_image`] with the buffer's depths (what `--explain`
+    /// draws); off by default, as it costs a pass over the buffer.
+    pub keep_image: bool,
+    /// The occluder budget: triangles rasterized at most, taken from the units of
+    /// largest screen area first.
+    pub occluder_triangles: u32,
+    /// The rasterizer's compiled variant (every one gives the same buffer).
+    pub kernel: Kernel,
 }
 
 impl Default for BufferOptions {
@@ -38,6 +87,9 @@ impl Default for BufferOptions {
         BufferOptions {
             kind: BufferKind::Masked,
             divisor: 1,
+            keep_image: false,
+            occluder_triangles: 1 << 16,
+            kernel: Kernel::Auto,
         }
     }
 }
@@ -50,6 +102,433 @@ pub(crate) fn cull(
     options: &CullOptions,
     c: &mut Culling,
 ) -> Result<()> {
-    let _ = (index, t, options, c);
-    Ok(())
+    OcclusionBuffer::default().cull(index, t, options, c)
+}
+
+/// What a box test needs: the rectangle of buffer pixels, inclusive, and the nearest
+/// key.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxRect {
+    /// Leftmost buffer pixel.
+    pub x0: u32,
+    /// Top buffer pixel.
+    pub y0: u32,
+    /// Rightmost buffer pixel.
+    pub x1: u32,
+    /// Bottom buffer pixel.
+    pub y1: u32,
+    /// The nearest depth key of the box, rounded towards nearer.
+    pub key: f32,
+    /// Screen area of the rectangle in buffer pixels (the occluder rank).
+    pub area: f64,
+}
+
+/// A unit of culling: an object (`cluster == u32::MAX`) or one of its clusters.
+#[derive(Clone, Copy, Debug)]
+struct Unit {
+    object: u32,
+    cluster: u32,
+    area: f64,
+    /// The nearest key of its box (`+inf` when it crosses the near plane).
+    key: f32,
+}
+
+/// The occlusion buffer and its scratch space, reused frame to frame (no allocation
+/// per frame once the sizes are reached).
+#[derive(Clone, Debug, Default)]
+pub struct OcclusionBuffer {
+    masked: masked::MaskedBuffer,
+    hiz: hiz::HizBuffer,
+    kind: BufferKind,
+    divisor: u32,
+    width: u32,
+    height: u32,
+    tris: Vec<Tri>,
+    units: Vec<Unit>,
+    eye: Vec<DVec3>,
+    clipped: Vec<DVec3>,
+}
+
+impl OcclusionBuffer {
+    /// An empty buffer (sized by the first frame).
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Empties the buffer for a viewport of `width x height` pixels.
+    pub fn reset(&mut self, kind: BufferKind, divisor: u32, width: u32, height: u32) {
+        let d = divisor.max(1);
+        self.kind = kind;
+        self.divisor = d;
+        self.width = width.div_ceil(d);
+        self.height = height.div_ceil(d);
+        let r = f64::from(d - 1) / f64::from(d);
+        match kind {
+            BufferKind::Masked => self.masked.reset(self.width, self.height, r),
+            BufferKind::HierarchicalZ => self.hiz.reset(self.width, self.height, r),
+        }
+    }
+
+    /// The buffer's size in pixels.
+    #[must_use]
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Rasterizes triangles given in viewport pixels (`[x, y, key]` per vertex, `x`
+    /// right and `y` down, the pixel sample at `+0.5`) into the buffer.
+    pub fn draw_screen_triangles(&mut self, tris: &[Tri], kernel: Kernel) {
+        let d = f64::from(self.divisor);
+        self.tris.clear();
+        self.tris.extend(
+            tris.iter()
+                .map(|t| t.map(|[x, y, z]| [(x - 0.5) / d, (y - 0.5) / d, z])),
+        );
+        let tris = std::mem::take(&mut self.tris);
+        self.draw(&tris, kernel);
+        self.tris = tris;
+    }
+
+    fn draw(&mut self, tris: &[Tri], kernel: Kernel) {
+        match self.kind {
+            BufferKind::Masked => self.masked.draw(tris, kernel),
+            BufferKind::HierarchicalZ => self.hiz.draw(tris, kernel),
+        }
+    }
+
+    /// The key bound of buffer pixel `(x, y)`: every occluder covering its samples is
+    /// at least this near (`-inf`: none known).
+    #[must_use]
+    pub fn bound(&self, x: u32, y: u32) -> f32 {
+        match self.kind {
+            BufferKind::Masked => self.masked.bound(x, y),
+            BufferKind::HierarchicalZ => self.hiz.bound(x, y),
+        }
+    }
+
+    /// Whether a box projected to `r` is hidden by the buffer.
+    #[must_use]
+    pub fn hidden(&self, r: &BoxRect) -> bool {
+        match self.kind {
+            BufferKind::Masked => self.masked.hidden(r.x0, r.y0, r.x1, r.y1, r.key),
+            BufferKind::HierarchicalZ => self.hiz.hidden(r.x0, r.y0, r.x1, r.y1, r.key),
+        }
+    }
+
+    /// The rectangle and nearest key of a world box, or `None` when the box must be
+    /// kept whatever the buffer holds: a corner at or in front of the near plane, a
+    /// rectangle outside the viewport, or a coordinate that is not finite.
+    #[must_use]
+    pub fn project_box(&self, t: &ViewTransform, b: &Aabb) -> Option<BoxRect> {
+        if b.is_empty() {
+            return None;
+        }
+        let near = t.near.max(t.near_limit);
+        let (mut x0, mut y0, mut x1, mut y1) = (
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        );
+        let mut dmin = f64::INFINITY;
+        for corner in b.corners() {
+            let e = t.world_to_eye(corner);
+            let depth = -e.z;
+            if !(depth > near) {
+                return None;
+            }
+            let clip = t.eye_to_clip(e);
+            if !(clip.w > 0.0) {
+                return None;
+            }
+            let x = (clip.x / clip.w + 1.0) * 0.5 * t.width;
+            let y = (1.0 - clip.y / clip.w) * 0.5 * t.height;
+            x0 = x0.min(x);
+            y0 = y0.min(y);
+            x1 = x1.max(x);
+            y1 = y1.max(y);
+            dmin = dmin.min(depth);
+        }
+        if !(x0.is_finite() && y0.is_finite() && x1.is_finite() && y1.is_finite()) {
+            return None;
+        }
+        // Viewport pixels whose sample (i + 0.5) the rectangle could reach, widened
+        // for rounding.
+        let slack = 1e-3 + 1e-9 * (x0.abs() + x1.abs() + y0.abs() + y1.abs());
+        let i0 = (x0 - 0.5 - slack).floor().max(0.0);
+        let j0 = (y0 - 0.5 - slack).floor().max(0.0);
+        let i1 = (x1 - 0.5 + slack).ceil().min(t.width - 1.0);
+        let j1 = (y1 - 0.5 + slack).ceil().min(t.height - 1.0);
+        if !(i0 <= i1 && j0 <= j1) {
+            return None;
+        }
+        let key = t.zq_of_depth(dmin);
+        let key = f32_up(key + DEPTH_MARGIN * key.abs() + 1e-12);
+        let d = self.divisor;
+        let (bx0, by0, bx1, by1) = (i0 as u32 / d, j0 as u32 / d, i1 as u32 / d, j1 as u32 / d);
+        Some(BoxRect {
+            x0: bx0,
+            y0: by0,
+            x1: bx1.min(self.width - 1),
+            y1: by1.min(self.height - 1),
+            key,
+            area: f64::from(bx1 - bx0 + 1) * f64::from(by1 - by0 + 1),
+        })
+    }
+
+    /// The buffer as eye-space depths (see [`BufferImage`]).
+    #[must_use]
+    pub fn image(&self, t: &ViewTransform) -> BufferImage {
+        let (w, h) = (self.width, self.height);
+        let mut depth = Vec::with_capacity(w as usize * h as usize);
+        for y in 0..h {
+            for x in 0..w {
+                let k = self.bound(x, y);
+                depth.push(if k == f32::NEG_INFINITY {
+                    f32::INFINITY
+                } else {
+                    t.depth_of_zq(f64::from(k)) as f32
+                });
+            }
+        }
+        BufferImage {
+            width: w,
+            height: h,
+            depth,
+        }
+    }
+
+    /// Runs the method on one frame: builds the buffer from the occluders the frustum
+    /// kept and culls the objects and clusters behind it (see the [module
+    /// documentation](self)).
+    pub fn cull(
+        &mut self,
+        index: &SceneIndex<'_>,
+        t: &ViewTransform,
+        options: &CullOptions,
+        c: &mut Culling,
+    ) -> Result<()> {
+        let bo = &options.buffer;
+        if bo.divisor == 0 {
+            return Err(crate::Error::option(
+                "buffer divisor",
+                "must be at least 1".to_owned(),
+            ));
+        }
+        let start = Instant::now();
+        self.reset(bo.kind, bo.divisor, t.width as u32, t.height as u32);
+        let scene = index.scene();
+        let clusters = index.clusters();
+        // Units and their rank.
+        let mut units = std::mem::take(&mut self.units);
+        units.clear();
+        let full = f64::from(self.width) * f64::from(self.height);
+        for (k, o) in scene.objects().iter().enumerate() {
+            if o.mesh.polygon_count() == 0 || c.objects[k].is_some() {
+                continue;
+            }
+            let area = |b: &Aabb| {
+                self.project_box(t, b)
+                    .map_or((full, f32::INFINITY), |r| (r.area, r.key))
+            };
+            if options.clusters {
+                for cl in clusters.of_object(k) {
+                    if c.clusters[cl].is_none() {
+                        let (a, key) = area(clusters.bounds(cl));
+                        units.push(Unit {
+                            object: k as u32,
+                            cluster: cl as u32,
+                            area: a,
+                            key,
+                        });
+                    }
+                }
+            } else {
+                let (a, key) = area(&o.bounds);
+                units.push(Unit {
+                    object: k as u32,
+                    cluster: u32::MAX,
+                    area: a,
+                    key,
+                });
+            }
+        }
+        units.sort_unstable_by(|a, b| b.area.total_cmp(&a.area));
+        // Occluder triangles.
+        self.tris.clear();
+        let budget = bo.occluder_triangles as usize;
+        let mut used_units = 0usize;
+        // The units within the budget, then drawn nearest first: a tile filled by
+        // near occluders refuses the farther ones at once (MSOC draws front to back for
+        // the same reason).
+        let mut selected = 0usize;
+        let mut triangles = 0usize;
+        for u in &units {
+            if triangles >= budget || u.area < 2.0 {
+                break;
+            }
+            selected += 1;
+            triangles += if u.cluster == u32::MAX {
+                scene.objects()[u.object as usize].mesh.triangle_count()
+            } else {
+                clusters.triangles(u.cluster as usize) as usize
+            };
+        }
+        units[..selected].sort_unstable_by(|a, b| b.key.total_cmp(&a.key));
+        for u in &units[..selected] {
+            used_units += 1;
+            let o = &scene.objects()[u.object as usize];
+            let mv = t.model_view(&o.transform);
+            if u.cluster == u32::MAX {
+                for p in 0..o.mesh.polygon_count() as u32 {
+                    self.emit(t, &mv, o, p);
+                }
+            } else {
+                for &p in clusters.polygons(u.cluster as usize) {
+                    self.emit(t, &mv, o, p);
+                }
+            }
+        }
+        self.units = units;
+        c.stage("buffer occluders", start);
+        let s = Instant::now();
+        let tris = std::mem::take(&mut self.tris);
+        self.draw(&tris, bo.kernel);
+        let drawn = tris.len();
+        self.tris = tris;
+        c.stage("buffer raster", s);
+        // Tests: objects, then clusters of the objects kept.
+        let s = Instant::now();
+        let (mut culled_objects, mut culled_clusters) = (0usize, 0usize);
+        for (k, o) in scene.objects().iter().enumerate() {
+            if o.mesh.polygon_count() == 0 || c.objects[k].is_some() {
+                continue;
+            }
+            if self
+                .project_box(t, &o.bounds)
+                .is_some_and(|r| self.hidden(&r))
+            {
+                c.cull_object(k, CullReason::Buffer);
+                culled_objects += 1;
+                continue;
+            }
+            if !options.clusters {
+                continue;
+            }
+            let range = clusters.of_object(k);
+            if range.len() < 2 {
+                continue;
+            }
+            for cl in range {
+                if c.clusters[cl].is_some() {
+                    continue;
+                }
+                if self
+                    .project_box(t, clusters.bounds(cl))
+                    .is_some_and(|r| self.hidden(&r))
+                {
+                    c.cull_cluster(cl, CullReason::Buffer);
+                    culled_clusters += 1;
+                }
+            }
+        }
+        c.stage("buffer tests", s);
+        c.notes.push(format!(
+            "occlusion buffer ({}, {}x{} pixels): {drawn} occluder triangles from {used_units} \
+             of {} units; {culled_objects} objects and {culled_clusters} clusters behind it",
+            match bo.kind {
+                BufferKind::Masked => "masked",
+                BufferKind::HierarchicalZ => "hierarchical z",
+            },
+            self.width,
+            self.height,
+            self.units.len(),
+        ));
+        if bo.keep_image {
+            c.buffer_image = Some(self.image(t));
+        }
+        Ok(())
+    }
+
+    /// Appends the triangles of polygon `p` of object `o` to the occluders, if it
+    /// faces the viewer: clipped to the near plane, projected to buffer coordinates.
+    fn emit(
+        &mut self,
+        t: &ViewTransform,
+        mv: &crate::view::ModelView,
+        o: &crate::scene::Object,
+        p: u32,
+    ) {
+        let pos = o.mesh.positions();
+        self.eye.clear();
+        self.eye.extend(
+            o.mesh
+                .polygon(p as usize)
+                .iter()
+                .map(|&i| mv.apply(pos[i as usize])),
+        );
+        let n = self.eye.len();
+        if n < 3 {
+            return;
+        }
+        // Newell's normal (counter-clockwise = front), flipped by a mirroring transform.
+        let mut normal = DVec3::ZERO;
+        let mut centroid = DVec3::ZERO;
+        for i in 0..n {
+            let (a, b) = (self.eye[i], self.eye[(i + 1) % n]);
+            normal += DVec3::new(
+                (a.y - b.y) * (a.z + b.z),
+                (a.z - b.z) * (a.x + b.x),
+                (a.x - b.x) * (a.y + b.y),
+            );
+            centroid += a;
+        }
+        centroid /= n as f64;
+        if o.mirrored {
+            normal = -normal;
+        }
+        let front = if t.orthographic {
+            normal.z > 1e-6 * normal.length()
+        } else {
+            -normal.dot(centroid) > 1e-6 * normal.length() * centroid.length()
+        };
+        if !front {
+            return;
+        }
+        // Clip to the near plane (depth >= near, a hair beyond it).
+        let dn = t.near.max(t.near_limit) * (1.0 + 1e-6);
+        self.clipped.clear();
+        for i in 0..n {
+            let (a, b) = (self.eye[i], self.eye[(i + 1) % n]);
+            let (da, db) = (-a.z - dn, -b.z - dn);
+            if da >= 0.0 {
+                self.clipped.push(a);
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                let s = da / (da - db);
+                let mut q = a + (b - a) * s;
+                // Keep the new point on the kept side despite rounding.
+                q.z = q.z.min(-dn);
+                self.clipped.push(q);
+            }
+        }
+        if self.clipped.len() < 3 {
+            return;
+        }
+        let d = f64::from(self.divisor);
+        let project = |e: DVec3| {
+            let clip = t.eye_to_clip(e);
+            let x = (clip.x / clip.w + 1.0) * 0.5 * t.width;
+            let y = (1.0 - clip.y / clip.w) * 0.5 * t.height;
+            [(x - 0.5) / d, (y - 0.5) / d, t.zq_of_depth(-e.z)]
+        };
+        let v0 = project(self.clipped[0]);
+        let mut prev = project(self.clipped[1]);
+        for &e in &self.clipped[2..] {
+            let v = project(e);
+            self.tris.push([v0, prev, v]);
+            prev = v;
+        }
+    }
 }
