@@ -220,6 +220,8 @@ fn options(args: &CullArgs, method: CullMethod) -> CullOptions {
     if let Some(n) = args.max_occluders {
         o.max_occluders = n;
     }
+    // The depth panel of the explain picture.
+    o.buffer.keep_image = args.explain.is_some();
     o
 }
 
@@ -276,6 +278,16 @@ pub fn run(args: &CullArgs) -> Result<()> {
     let start = Instant::now();
     let _ = index.clusters();
     let clusters_ms = start.elapsed().as_secs_f64() * 1e3;
+    // The PVS (portals, on a scene with cells), with a progress bar on a terminal.
+    if args.method.0.contains(&CullMethod::Portals) && scene.cells().is_some() {
+        if std::io::stderr().is_terminal() {
+            let (pb, feed) = crate::common::progress_bar("PVS");
+            let _ = index.pvs_with_progress(&|done, total| feed(done as f64 / total.max(1) as f64));
+            pb.finish_and_clear();
+        } else {
+            let _ = index.pvs();
+        }
+    }
     let bar = (frames.len() > 1 && std::io::stderr().is_terminal()).then(|| {
         let pb = indicatif::ProgressBar::new(frames.len() as u64);
         pb.set_style(

@@ -323,6 +323,15 @@ impl<'s> SceneIndex<'s> {
     /// the default options: no time limit, a budget of portal sequences per cell), built
     /// once; `None` for a scene without cells.
     pub fn pvs(&self) -> Option<&crate::cull::portals::Pvs> {
+        self.pvs_with_progress(&|_, _| {})
+    }
+
+    /// [`Self::pvs`], reporting `(cells done, cells)` to `progress` while it is computed
+    /// (on the first call only; later calls return the table at once).
+    pub fn pvs_with_progress(
+        &self,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Option<&crate::cull::portals::Pvs> {
         self.pvs
             .get_or_init(|| {
                 let graph = self.scene.cells()?;
@@ -330,7 +339,7 @@ impl<'s> SceneIndex<'s> {
                 crate::cull::portals::pvs::compute(
                     graph,
                     &crate::cull::portals::PvsOptions::default(),
-                    &|_, _| {},
+                    progress,
                 )
                 .ok()
             })

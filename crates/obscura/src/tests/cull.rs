@@ -239,17 +239,27 @@ impl Effectiveness {
     }
 }
 
-/// The least fraction of truly hidden objects each method must cull on a case, over
-/// its views. Today's floors hold for the stubs (only the frustum culls); THE LEAD
-/// TIGHTENS THEM once the methods are merged (the issue: the occlusion buffer culls
-/// most of the city's hidden boxes from street level; the PVS most cells of the level).
-///
-/// The floor applies to [`Effectiveness::fraction`]; [`Effectiveness::occluded_fraction`]
-/// (printed beside it) is the score that separates the occlusion methods.
-pub(crate) fn effectiveness_floor(_case: &str, method: CullMethod) -> f64 {
+/// The least fractions each method must cull on a case, over its views: of the truly
+/// hidden objects ([`Effectiveness::fraction`]), and of those hidden by other geometry
+/// inside the view volume ([`Effectiveness::occluded_fraction`], occlusion culling's own
+/// score). Set about 20 points below what the methods reached when they were merged
+/// (CI run, 20 views, 160x90): the buffer culled 84% of the city's occluded boxes from
+/// street level and 80% of the random boxes', the occluders 72% and 74%, portals 86%
+/// of the level's occluded objects and screen portals 76%. The issue's words: the
+/// occlusion buffer culls most of the city's hidden boxes from street level; in the
+/// demo level the PVS removes most cells.
+pub(crate) fn effectiveness_floor(case: &str, method: CullMethod) -> (f64, f64) {
+    let city = case.starts_with("city");
+    let boxes = case.starts_with("random boxes");
+    let level = case.starts_with("demo:level");
+    let frustum = if city || boxes || level { 0.6 } else { 0.0 };
     match method {
-        CullMethod::None => 0.0,
-        _ => 0.0,
+        CullMethod::None => (0.0, 0.0),
+        CullMethod::Buffer if city || boxes => (frustum, 0.6),
+        CullMethod::Occluders if city || boxes => (frustum, 0.5),
+        CullMethod::Portals if level => (frustum, 0.65),
+        CullMethod::ScreenPortals if level => (frustum, 0.55),
+        _ => (frustum, 0.0),
     }
 }
 
@@ -483,12 +493,18 @@ fn harness(
 /// Asserts the floors of [`effectiveness_floor`].
 fn assert_floors(results: &[(String, CullMethod, Effectiveness)]) {
     for (case, method, e) in results {
-        let floor = effectiveness_floor(case, *method);
+        let (floor, occluded_floor) = effectiveness_floor(case, *method);
         assert!(
             e.fraction() >= floor,
             "{case}: {method:?} culls {:.1}% of the truly hidden objects, below {:.1}%",
             100.0 * e.fraction(),
             100.0 * floor
+        );
+        assert!(
+            e.occluded_fraction() >= occluded_floor,
+            "{case}: {method:?} culls {:.1}% of the objects hidden inside the view volume, below {:.1}%",
+            100.0 * e.occluded_fraction(),
+            100.0 * occluded_floor
         );
         if *method == CullMethod::None {
             assert_eq!(e.hidden_culled, 0, "{case}: no method culls nothing");
