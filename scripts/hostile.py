@@ -759,8 +759,116 @@ def class_messages(bin_, root, rng):
     counts[cls] = n
 
 
+CELLS_OK = """[[object]]
+name = "box"
+primitive = "box"
+size = [0.5, 1, 0.5]
+translate = [0.75, 0.5, 0.75]
+
+[[cell]]
+name = "west"
+min = [0, 0, 0]
+max = [2, 3, 2]
+
+[[cell]]
+name = "east"
+min = [2, 0, 0]
+max = [6, 3, 2]
+
+[[portal]]
+cells = ["west", "east"]
+polygon = [[2, 0, 0.5], [2, 0, 1.5], [2, 2, 1.5], [2, 2, 0.5]]
+"""
+
+
+def class_culling(bin_, root, rng):
+    """cull, export and render --cull on hostile cells, walks, cameras and outputs."""
+    cls = "culling"
+    n = 0
+    d = os.path.join(root, "cells")
+    os.makedirs(d)
+    cells_bad = {
+        "off-boundary": CELLS_OK.replace("[[2, 0, 0.5], [2, 0, 1.5]", "[[2.5, 0, 0.5], [2.5, 0, 1.5]"),
+        "open-cell": CELLS_OK.replace('min = [2, 0, 0]\nmax = [6, 3, 2]',
+                                      'planes = [[1, 0, 0, -6], [-1, 0, 0, 2]]'),
+        "nan-portal": CELLS_OK.replace("[2, 2, 1.5]", "[2, nan, 1.5]"),
+        "huge": CELLS_OK.replace("max = [6, 3, 2]", "max = [1e300, 3, 2]"),
+        "unknown-cell": CELLS_OK.replace('cells = ["west", "east"]', 'cells = ["west", "north"]'),
+        "one-cell-portal": CELLS_OK.replace('cells = ["west", "east"]', 'cells = ["west", "west"]'),
+        "degenerate-portal": CELLS_OK.replace("[2, 2, 1.5], [2, 2, 0.5]", "[2, 0, 1.5], [2, 0, 0.5]"),
+        "many-points": CELLS_OK.replace("[2, 2, 1.5], [2, 2, 0.5]",
+                                        ", ".join(["[2, 1, 1]"] * 5000)),
+    }
+    for name, text in cells_bad.items():
+        write(os.path.join(d, f"{name}.toml"), text.encode())
+        for args in (["cull", f"{name}.toml", "--method", "all", "--size", "64x48"],
+                     ["render", f"{name}.toml", "--cull", "portals", "--size", "64x48",
+                      "-o", "o.png"]):
+            r = run(bin_, args, d)
+            n += 1
+            common_checks(cls, f"cells {name}: {args[0]}", r, names=(f"{name}.toml",))
+    write(os.path.join(d, "ok.toml"), CELLS_OK.encode())
+    # Odd cameras for every method: outside every cell, on a portal, at a corner, far.
+    eyes = ["-5,1,1", "2,1,1", "0,0,0", "1e12,1,1", "1,1,1", "2,2,0.5"]
+    for eye in eyes:
+        for ortho in ([], ["--ortho", "3"]):
+            r = run(bin_, ["cull", "ok.toml", "--method", "all", "--size", "64x48",
+                           "--eye", eye, "--target", "4,1,1"] + ortho, d)
+            n += 1
+            common_checks(cls, f"cull eye {eye} {ortho}", r, names=("eye", "camera"))
+    # Walk files.
+    walks = {
+        "empty.csv": b"",
+        "header.csv": b"eye_x,eye_y,eye_z,target_x,target_y,target_z\n",
+        "nan.csv": b"eye_x,eye_y,eye_z,target_x,target_y,target_z\nnan,1,1,4,1,1\n",
+        "short.csv": b"eye_x,eye_y,eye_z,target_x,target_y,target_z\n1,1,1\n",
+        "same.csv": b"eye_x,eye_y,eye_z,target_x,target_y,target_z\n1,1,1,1,1,1\n",
+        "words.csv": b"eye_x,eye_y,eye_z,target_x,target_y,target_z\na,b,c,d,e,f\n",
+        "binary.csv": bytes(rng.randrange(256) for _ in range(4000)),
+        "long.csv": b"eye_x,eye_y,eye_z,target_x,target_y,target_z\n" + b"1" * 3_000_000 + b"\n",
+        "fov.csv": b"eye_x,eye_y,eye_z,target_x,target_y,target_z,fov\n1,1,1,4,1,1,400\n",
+    }
+    for name, data in walks.items():
+        write(os.path.join(d, name), data)
+        r = run(bin_, ["cull", "ok.toml", "--method", "all", "--size", "64x48",
+                       "--walk", name], d)
+        n += 1
+        common_checks(cls, f"walk {name}", r, names=(name,))
+    # Outputs onto inputs are refused, inputs intact.
+    h = sha(os.path.join(d, "ok.toml"))
+    for args in (["export", "ok.toml", "-o", "ok.toml"],
+                 ["export", "ok.toml", "-o", "ok.toml", "--force-extension"],
+                 ["cull", "ok.toml", "--kept", "ok.toml", "--force-extension"],
+                 ["cull", "ok.toml", "--explain", "ok.toml", "--force-extension"],
+                 ["cull", "ok.toml", "--stats-json", "ok.toml", "--force-extension"]):
+        r = run(bin_, args, d)
+        n += 1
+        case = " ".join(args)
+        common_checks(cls, case, r, names=("ok.toml",))
+        if sha(os.path.join(d, "ok.toml")) != h:
+            note(cls, "input-overwritten", case)
+            write(os.path.join(d, "ok.toml"), CELLS_OK.encode())
+        if r.rc == 0:
+            note(cls, "input-output-accepted", case)
+    # Every demo, every method, small and odd sizes; export of each demo.
+    for demo in ("default", "cube", "city", "blocks", "level", "level-grid", "cells5"):
+        for size in ("1x1", "64x48", "3x2000"):
+            r = run(bin_, ["cull", f"demo:{demo}", "--method", "all", "--size", size], d)
+            n += 1
+            common_checks(cls, f"cull demo:{demo} {size}", r, names=("size",))
+        r = run(bin_, ["export", f"demo:{demo}", "-o", f"{demo}.obj"], d)
+        n += 1
+        common_checks(cls, f"export demo:{demo}", r)
+        r = run(bin_, ["render", f"{demo}.obj", "--cull", "buffer", "--size", "64x48",
+                       "-o", "o.png"], d)
+        n += 1
+        common_checks(cls, f"render exported {demo} --cull buffer", r)
+    counts[cls] = n
+
+
 CLASSES = {"reads": class_reads, "writes": class_writes, "resources": class_resources,
-           "linear": class_linear, "numbers": class_numbers, "messages": class_messages}
+           "linear": class_linear, "numbers": class_numbers, "messages": class_messages,
+           "culling": class_culling}
 
 
 def main():
