@@ -694,6 +694,7 @@ fn bad_floor_plans_are_refused_by_name() {
 
 /// A scene file with cells of the three kinds (box, floor polygon, planes), portals,
 /// and objects assigned by name or by their bounds.
+#[cfg(feature = "toml-scene")]
 const TOML_CELLS: &str = r#"
 [camera]
 eye = [1, 1.5, 1]
@@ -735,6 +736,7 @@ cells = ["north", "west"]
 polygon = [[0, 0, 2], [2, 0, 2], [2, 3, 2], [0, 3, 2]]
 "#;
 
+#[cfg(feature = "toml-scene")]
 fn load_toml(name: &str, text: &str) -> crate::Result<Scene> {
     let dir = std::env::temp_dir().join(format!("obscura-cells-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -746,11 +748,13 @@ fn load_toml(name: &str, text: &str) -> crate::Result<Scene> {
 }
 
 /// The 1-based line of the first occurrence of `needle` in `text`.
+#[cfg(feature = "toml-scene")]
 fn line_of(text: &str, needle: &str) -> usize {
     text[..text.find(needle).unwrap()].matches('\n').count() + 1
 }
 
 #[test]
+#[cfg(feature = "toml-scene")]
 fn scene_files_describe_cells_and_portals() {
     let scene = load_toml("ok", TOML_CELLS).unwrap();
     let g = scene.cells().unwrap();
