@@ -28,6 +28,9 @@ use obscura::{
     Algorithm, Camera, Frame, PrepareOptions, RenderOptions, Scene, SceneIndex, View, Viewport,
 };
 
+#[path = "common/sponza.rs"]
+mod sponza;
+
 fn env_count(name: &str, default: usize) -> usize {
     std::env::var(name)
         .ok()
@@ -177,27 +180,13 @@ fn main() {
             if speedup >= 3.0 { "(met)" } else { "(NOT met)" }
         );
 
-        let path = std::env::var("SPONZA").unwrap_or_else(|_| {
-            concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/../../../shared/data/sponza.obj"
-            )
-            .to_string()
-        });
-        let Ok(sponza) = Scene::load(&path) else {
-            println!("sponza: no file at {path} (set SPONZA): skipped");
-            return;
+        let (sponza, camera) = match sponza::atrium() {
+            Ok(s) => s,
+            Err(path) => {
+                println!("sponza: no file at {path} (set SPONZA): skipped");
+                return;
+            }
         };
-        // The atrium camera of benches/common.
-        let mut camera = Camera::perspective(
-            DVec3::new(0.0, -10.0, 2.0),
-            DVec3::new(0.0, 10.0, 4.0),
-            DVec3::Z,
-            60.0,
-            0.1,
-            100.0,
-        );
-        camera.fit_depth_range(&sponza.bounds());
         let (_, total) = measure(
             "sponza atrium",
             &sponza,

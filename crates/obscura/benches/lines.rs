@@ -10,12 +10,14 @@
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use glam::DVec3;
 use obscura::index::SceneIndex;
 use obscura::lines::hlr::{self, HlrOptions};
 use obscura::scene::{ObjectDesc, demo};
 use obscura::view::{PrepareOptions, View};
 use obscura::{Camera, Scene, Viewport};
+
+#[path = "common/sponza.rs"]
+mod sponza;
 
 fn torus(segments: u32, sides: u32) -> Scene {
     let mut s = Scene::new();
@@ -29,27 +31,9 @@ fn torus(segments: u32, sides: u32) -> Scene {
 }
 
 fn sponza() -> Option<(Scene, Camera)> {
-    let path = std::env::var("SPONZA").unwrap_or_else(|_| {
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../../shared/data/sponza.obj"
-        )
-        .to_string()
-    });
-    let Ok(scene) = Scene::load(&path) else {
-        eprintln!("no Sponza at {path}: skipped");
-        return None;
-    };
-    let mut camera = Camera::perspective(
-        DVec3::new(0.0, -10.0, 2.0),
-        DVec3::new(0.0, 10.0, 4.0),
-        DVec3::Z,
-        60.0,
-        0.1,
-        100.0,
-    );
-    camera.fit_depth_range(&scene.bounds());
-    Some((scene, camera))
+    sponza::atrium()
+        .map_err(|path| eprintln!("no Sponza at {path}: skipped"))
+        .ok()
 }
 
 fn hlr_cases(c: &mut Criterion) {

@@ -17,7 +17,10 @@ use glam::DVec3;
 use obscura::cull::occlusion::{CullMethod, CullOptions};
 use obscura::scene::demo;
 use obscura::surface::Algorithm;
-use obscura::{Camera, PrepareOptions, RenderOptions, Scene, SceneIndex, View, Viewport};
+use obscura::{Camera, PrepareOptions, RenderOptions, SceneIndex, View, Viewport};
+
+#[path = "common/sponza.rs"]
+mod sponza;
 
 fn env_count(name: &str, default: usize) -> usize {
     std::env::var(name)
@@ -132,26 +135,13 @@ fn main() {
         sum_plain / sum_both
     );
 
-    let path = std::env::var("SPONZA").unwrap_or_else(|_| {
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../../shared/data/sponza.obj"
-        )
-        .to_string()
-    });
-    let Ok(scene) = Scene::load(&path) else {
-        println!("sponza: no scene at {path}: skipped");
-        return;
+    let (scene, camera) = match sponza::atrium() {
+        Ok(s) => s,
+        Err(path) => {
+            println!("sponza: no scene at {path}: skipped");
+            return;
+        }
     };
-    let mut camera = Camera::perspective(
-        DVec3::new(0.0, -10.0, 2.0),
-        DVec3::new(0.0, 10.0, 4.0),
-        DVec3::Z,
-        60.0,
-        0.1,
-        100.0,
-    );
-    camera.fit_depth_range(&scene.bounds());
     let index = SceneIndex::new(&scene);
     let t = Instant::now();
     let _ = index.occluder_candidates();

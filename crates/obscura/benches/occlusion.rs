@@ -27,6 +27,9 @@ use obscura::surface::{Algorithm, RenderOptions};
 use obscura::view::ViewTransform;
 use obscura::{Camera, PrepareOptions, Scene, SceneIndex, View, Viewport};
 
+#[path = "common/sponza.rs"]
+mod sponza;
+
 /// Min and median of `runs` runs of `f`, in milliseconds.
 fn time(runs: usize, mut f: impl FnMut()) -> (f64, f64) {
     let mut t: Vec<f64> = (0..runs)
@@ -87,19 +90,6 @@ fn fill_rate(runs: usize) {
             n as f64 / best / 1e3
         );
     }
-}
-
-fn sponza_camera(scene: &Scene) -> Camera {
-    let mut c = Camera::perspective(
-        DVec3::new(0.0, -10.0, 2.0),
-        DVec3::new(0.0, 10.0, 4.0),
-        DVec3::Z,
-        60.0,
-        0.1,
-        100.0,
-    );
-    c.fit_depth_range(&scene.bounds());
-    c
 }
 
 fn buffer_frame(name: &str, scene: &Scene, camera: &Camera, runs: usize) {
@@ -174,16 +164,8 @@ fn main() {
         .and_then(|a| a.parse().ok())
         .unwrap_or(30);
     fill_rate(runs);
-    let path = std::env::var("SPONZA").unwrap_or_else(|_| {
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../../shared/data/sponza.obj"
-        )
-        .into()
-    });
-    match Scene::load(&path) {
-        Ok(sponza) => {
-            let camera = sponza_camera(&sponza);
+    match sponza::atrium() {
+        Ok((sponza, camera)) => {
             buffer_frame("sponza", &sponza, &camera, runs);
             pays(
                 "sponza atrium",
@@ -193,7 +175,7 @@ fn main() {
                 runs.min(10),
             );
         }
-        Err(e) => println!("sponza: not measured ({path}: {e})"),
+        Err(path) => println!("sponza: not measured (no scene at {path})"),
     }
     let city = obscura::scene::demo::city(10, 10, 3);
     let mut rng = Rng(5);
