@@ -265,7 +265,7 @@ impl UniformGrid {
         )
     }
 
-    /// [`UniformGrid::build_with_budget`] that also stops with the deadline's error
+    /// `UniformGrid::build_with_budget` that also stops with the deadline's error
     /// (see [`crate::work`]) when it passes during the build.
     pub fn build_until(
         triangles: &SceneTriangles,

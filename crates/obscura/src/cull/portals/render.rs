@@ -18,7 +18,7 @@
 //! - Rays are seen only from the near plane on: a wall closer than it is clipped away
 //!   and the lines of sight start in the cell behind it. The walk therefore starts from
 //!   every cell that meets the ball around the eye through the corners of the near
-//!   rectangle ([`start_cells`]), each with its own PVS row.
+//!   rectangle (`start_cells`), each with its own PVS row.
 //! - A walk that passes its budget of visits is abandoned (no portal culling).
 //! - Orthographic views, whose lines of sight do not meet at the eye, are not
 //!   portal-culled.

@@ -19,7 +19,7 @@
 //! algorithms"): the region a convex polygon hides is a convex volume, bounded by the
 //! *side planes* through the eye and each of its edges (planes holding the view
 //! direction in an orthographic view) and by its own plane. Clipping the edge's
-//! segment by that volume gives one parameter interval per occluder ([`cut`]):
+//! segment by that volume gives one parameter interval per occluder (`cut`):
 //! - the edge is first clipped to the view volume (Liang-Barsky in clip space, whose
 //!   coordinates are affine along the edge, so the clipped range is in the edge's own
 //!   `t`); what lies outside is not drawn;
@@ -29,13 +29,13 @@
 //!   every renderer; polygons wholly outside another plane of the view volume are left
 //!   out; the polygons the edge lies on never hide it;
 //! - candidates come from a screen grid of the occluders' boxes built once per view,
-//!   walked along the edge's image and filtered by box and depth ([`occluders`]);
+//!   walked along the edge's image and filtered by box and depth (`occluders`);
 //! - each covered interval is closed on the occluder's boundary (an edge lying exactly
 //!   on or behind the image of another face's edge is covered) and strictly behind its
 //!   plane (a face never hides what lies in it: coplanar touching faces, the edge's
 //!   own faces); the plane bound is where the edge pierces the face;
 //! - the edge is cut at every interval end and each piece counts the distinct faces
-//!   covering it ([`invisibility`]): a face split into several polygons counts once, and
+//!   covering it (`invisibility`): a face split into several polygons counts once, and
 //!   an edge covered only along other faces' boundaries counts one.
 //!
 //! Every sign that decides topology (which side of a side plane, in front or behind) is

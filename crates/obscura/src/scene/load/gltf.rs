@@ -32,7 +32,7 @@
 //! other start is an error naming the first bytes in hex and what was expected.
 //!
 //! Buffers: the GLB binary chunk, base64 `data:` URIs, and files inside the glTF's own
-//! folder tree, by the rule every loader follows ([`super::reference`]): absolute
+//! folder tree, by the rule every loader follows (`super::reference`): absolute
 //! paths, `file:` URIs and references leading out of the folder (by `..` or a symbolic
 //! link) are refused unless
 //! [`LoadOptions::allow_outside_references`](super::LoadOptions) is set; remote

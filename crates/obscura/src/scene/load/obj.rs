@@ -10,7 +10,7 @@
 //! Read: `v x y z [w]` (`w` and trailing vertex colours are accepted and ignored), `f`
 //! with `v`, `v/vt`, `v//vn` and `v/vt/vn` references, negative (relative) indices,
 //! `o`, `g`, `usemtl`, `mtllib` (diffuse `Kd` through [`super::mtl`], resolved relative
-//! to the OBJ file by the rule of [`super::reference`]), comments (`#` to the end of the line), blank lines, `\` line
+//! to the OBJ file by the rule of `super::reference`), comments (`#` to the end of the line), blank lines, `\` line
 //! continuations, CRLF line ends. Ignored: `vt`, `vn`, `vp`, `l`, `p`, `s` and every
 //! other statement (curves, surfaces, display attributes).
 //!

@@ -7,7 +7,7 @@
 //! them all, in its own order), so face ids follow the file too.
 //!
 //! - `mesh = "path"` (relative to the scene file, inside its folder tree by the rule of
-//!   [`super::reference`]: an absolute path or one leading out by `..` or a symbolic
+//!   `super::reference`: an absolute path or one leading out by `..` or a symbolic
 //!   link is an [`Error::OutsideReference`] unless
 //!   [`LoadOptions::allow_outside_references`](super::LoadOptions) is set) loads any
 //!   mesh format of [`super::load_objects`]; a file referenced several times is read
