@@ -81,15 +81,19 @@ fn prepare<'g>(
 
 /// Culls, with [`CullReason::Portal`], the objects held by cells (and their clusters)
 /// that no visit may see: `sees(visit, box)` says whether visit `v` may see a box;
-/// `visits_of[cell]` lists the visits to each cell. Objects in no cell are kept.
+/// `visited_cells` gives the cell of each visit, in order. Objects in no cell are kept.
 fn decide(
     index: &SceneIndex<'_>,
     graph: &CellGraph,
     options: &CullOptions,
     c: &mut Culling,
-    visits_of: &[Vec<usize>],
+    visited_cells: impl Iterator<Item = u32>,
     sees: impl Fn(usize, &Aabb) -> bool,
 ) {
+    let mut visits_of = vec![Vec::new(); graph.cells.len()];
+    for (i, cell) in visited_cells.enumerate() {
+        visits_of[cell as usize].push(i);
+    }
     let scene = index.scene();
     let clusters = index.clusters();
     let n = scene.objects().len();
@@ -151,12 +155,9 @@ pub(crate) fn cull_portals(
         ));
         return Ok(());
     }
-    let mut visits_of = vec![Vec::new(); graph.cells.len()];
-    for (i, v) in w.visits.iter().enumerate() {
-        visits_of[v.cell as usize].push(i);
-    }
     let eye = t.eye;
-    decide(index, graph, options, c, &visits_of, |v, b| {
+    let cells = w.visits.iter().map(|v| v.cell);
+    decide(index, graph, options, c, cells, |v, b| {
         w.visits[v].may_see(eye, b)
     });
     c.stage("portals", start);
@@ -180,11 +181,8 @@ pub(crate) fn cull_screen_portals(
         ));
         return Ok(());
     };
-    let mut visits_of = vec![Vec::new(); graph.cells.len()];
-    for (i, v) in visits.iter().enumerate() {
-        visits_of[v.cell as usize].push(i);
-    }
-    decide(index, graph, options, c, &visits_of, |v, b| {
+    let cells = visits.iter().map(|v| v.cell);
+    decide(index, graph, options, c, cells, |v, b| {
         screen::box_meets(t, visits[v].rect, b)
     });
     c.stage("screen portals", start);
