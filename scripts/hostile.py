@@ -25,6 +25,7 @@ anything was found. Python 3.8+, no packages.
 import argparse
 import hashlib
 import json
+import math
 import os
 import random
 import resource
@@ -882,9 +883,97 @@ def class_culling(bin_, root, rng):
     counts[cls] = n
 
 
+def class_lines(bin_, root, rng):
+    """lines: hostile meshes, height fields, pages, drawings and outputs."""
+    cls = "lines"
+    n = 0
+    d = os.path.join(root, "lines")
+    os.makedirs(d)
+    write(os.path.join(d, "cube.obj"), CUBE_OBJ)
+    write(os.path.join(d, "cube.mtl"), MTL)
+    meshes = {
+        "nan.obj": b"v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n",
+        "huge.obj": b"v 0 0 0\nv 1e300 0 0\nv 0 1e300 0\nv 0 0 1e300\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n",
+        "flat.obj": b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n",
+        "tiny.obj": b"v 0 0 0\nv 1e-300 0 0\nv 0 1e-300 0\nf 1 2 3\n",
+        "same.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 3\nf 3 2 1\n",
+        "empty.obj": b"",
+        "fan.obj": b"v 0 0 0\n" + b"".join(b"v %f %f 0\n" % (math.cos(a / 97.0), math.sin(a / 97.0))
+                                          for a in range(600)) +
+                   b"".join(b"f 1 %d %d\n" % (i + 2, i + 3) for i in range(598)),
+    }
+    for name, data in meshes.items():
+        write(os.path.join(d, name), data)
+        for algo in ("hlr", "roberts"):
+            r = run(bin_, ["lines", name, "--algo", algo, "--size", "64x48", "-o", "o.svg",
+                           "--check"], d)
+            n += 1
+            common_checks(cls, f"lines {algo} {name}", r, names=(name, name.split(".")[0]))
+    # Height fields.
+    fields = {
+        "nan.csv": b"1,2\nnan,4\n",
+        "ragged.csv": b"1,2,3\n4,5\n",
+        "empty.csv": b"",
+        "one.csv": b"7\n",
+        "words.csv": b"a,b\nc,d\n",
+        "long.csv": b",".join([b"1"] * 200000) + b"\n",
+        "huge.csv": b"1e308,-1e308\n1e308,1e308\n",
+        "bad.npy": b"\x93NUMPY\x01\x00\x20\x00{'descr': '<f8', 'shape': (99999999, 99999999), }\n",
+        "short.npy": b"\x93NUMPY\x01\x00\x76\x00{'descr': '<f8', 'fortran_order': False, 'shape': (4, 4), }" + b" " * 50 + b"\n" + b"\x00" * 8,
+        "garbage.png": bytes(rng.randrange(256) for _ in range(3000)),
+    }
+    for name, data in fields.items():
+        write(os.path.join(d, name), data)
+        r = run(bin_, ["lines", "--algo", "horizon", "--field", name, "--size", "64x48",
+                       "-o", "o.svg"], d)
+        n += 1
+        common_checks(cls, f"field {name}", r, names=(name,))
+    for args in (["--function", "nosuch"], ["--function", "ripple", "--grid", "0"],
+                 ["--function", "ripple", "--grid", "1000000000"],
+                 ["--function", "ripple", "--grid", "3000"],
+                 ["--function", "peaks", "--eye", "0,1e300,0"],
+                 ["--function", "bumps", "--curves", "both", "--ridgeline"],
+                 ["--function", "waves", "--eye", "0,-5,0", "--target", "0,0,0"]):
+        r = run(bin_, ["lines", "--algo", "horizon", "--size", "64x48", "-o", "o.svg"] + args, d)
+        n += 1
+        common_checks(cls, "horizon " + " ".join(args), r,
+                      names=("function", "grid", "eye", "field", "view", "camera", "--time-limit"))
+    # Pages and numbers.
+    for args in (["--page", "A0x"], ["--page", "0x0mm"], ["--page", "1e9x1e9mm"],
+                 ["--page", "A4", "--margin", "200"], ["--page", "A4", "--margin", "-1"],
+                 ["--stroke", "nan"], ["--stroke", "1e300"], ["--precision", "99"],
+                 ["--tolerance", "-1"], ["--min-length", "inf"], ["--crease", "500"],
+                 ["--edges", "nosuch"], ["--size", "16384x16384"]):
+        r = run(bin_, ["lines", "cube.obj", "-o", "o.svg"] + args, d)
+        n += 1
+        common_checks(cls, "lines " + " ".join(args), r, names=tuple(a for a in args if a.startswith("--")))
+    # Drawings read back.
+    drawings = {"d1.json": b"{", "d2.json": b"[]", "d3.json": b'{"width": 1e18, "height": 5, "edges": []}',
+                "d4.json": b'{"width": 64, "height": 48, "edges": [{"pieces": "x"}]}'}
+    for name, data in drawings.items():
+        write(os.path.join(d, name), data)
+        r = run(bin_, ["lines", "--drawing", name, "-o", "o.svg", "--png", "o.png"], d)
+        n += 1
+        common_checks(cls, f"drawing {name}", r, names=(name,))
+    # Outputs onto inputs.
+    h = sha(os.path.join(d, "cube.obj"))
+    for args in (["-o", "cube.obj", "--force-extension"], ["--json", "cube.obj", "--force-extension"],
+                 ["--png", "cube.mtl", "--force-extension"]):
+        r = run(bin_, ["lines", "cube.obj"] + args, d)
+        n += 1
+        case = "lines " + " ".join(args)
+        common_checks(cls, case, r, names=("cube.obj", "cube.mtl"))
+        if sha(os.path.join(d, "cube.obj")) != h:
+            note(cls, "input-overwritten", case)
+            write(os.path.join(d, "cube.obj"), CUBE_OBJ)
+        if r.rc == 0:
+            note(cls, "input-output-accepted", case)
+    counts[cls] = n
+
+
 CLASSES = {"reads": class_reads, "writes": class_writes, "resources": class_resources,
            "linear": class_linear, "numbers": class_numbers, "messages": class_messages,
-           "culling": class_culling}
+           "culling": class_culling, "lines": class_lines}
 
 
 def main():

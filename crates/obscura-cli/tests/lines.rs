@@ -459,3 +459,34 @@ fn height_field_curves_and_ridgeline() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Plotting cannot stop half-way, so a drawing whose pieces would take longer than the
+/// time left is refused before plotting, naming --time-limit: a 1000x1000 height
+/// field's million segments (about a second to plot) under a 0.05 s limit.
+#[test]
+fn plotting_past_the_time_limit_is_refused_by_its_estimate() {
+    let dir = tempdir("plot-limit");
+    let o = obscura(
+        &[
+            "lines",
+            "--algo",
+            "horizon",
+            "--function",
+            "ripple",
+            "--grid",
+            "1000",
+            "--size",
+            "64x48",
+            "--time-limit",
+            "0.05",
+            "-o",
+            "o.svg",
+        ],
+        &dir,
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(err.contains("--time-limit"), "{err}");
+    assert!(!dir.join("o.svg").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
