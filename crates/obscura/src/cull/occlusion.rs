@@ -14,7 +14,6 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::clusters::Clusters;
 use crate::Result;
 use crate::index::SceneIndex;
 use crate::scene::{Camera, Viewport};
@@ -354,12 +353,6 @@ pub fn cull(
     c.stats.total_ms = start.elapsed().as_secs_f64() * 1e3;
     c.finish(index);
     Ok(c)
-}
-
-/// The clusters of an index, for callers that only hold the decisions.
-#[must_use]
-pub fn clusters<'a>(index: &'a SceneIndex<'_>) -> &'a Clusters {
-    index.clusters()
 }
 
 #[cfg(test)]

@@ -133,10 +133,8 @@ impl<'s> View<'s> {
         let mut stats = PipelineStats::default();
         let threads = passes::thread_count();
 
-        let mut visible = visible_objects(scene, &t, options, &mut stats);
-        if let Some(c) = &culling {
-            visible.retain(|&(k, _)| c.objects[k].is_none());
-        }
+        let culled = culling.as_ref().map(|c| c.objects.as_slice());
+        let mut visible = visible_objects(scene, &t, options, culled, &mut stats);
 
         // Vertices: world -> eye -> clip, outcodes, screen positions.
         let start = Instant::now();

@@ -306,17 +306,20 @@ pub fn fitted_orthographic_planes(scene: &Scene, camera: &Camera) -> Option<Came
 /// The objects to draw, as `(index, wholly inside the frustum)`: those with faces, less
 /// those outside the frustum by their bounding sphere, then box (all of them when
 /// object culling is off). Counted in `stats`.
+/// Objects an occlusion-culling run already removed (`culled[k]` is `Some`) are left out
+/// without a second test.
 pub(super) fn visible_objects(
     scene: &Scene,
     t: &ViewTransform,
     options: &PrepareOptions,
+    culled: Option<&[Option<crate::cull::occlusion::CullReason>]>,
     stats: &mut PipelineStats,
 ) -> Vec<(usize, bool)> {
     let start = Instant::now();
     let planes = t.eye_frustum_planes();
     let mut visible: Vec<(usize, bool)> = Vec::with_capacity(scene.objects().len());
     for (k, o) in scene.objects().iter().enumerate() {
-        if o.mesh.polygon_count() == 0 {
+        if o.mesh.polygon_count() == 0 || culled.is_some_and(|c| c[k].is_some()) {
             continue;
         }
         if !options.frustum_cull_objects {

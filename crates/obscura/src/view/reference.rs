@@ -24,7 +24,7 @@ pub(super) fn prepare_reference<'s>(
     let t = checked_transform(scene, camera, viewport)?;
     let mut stats = PipelineStats::default();
 
-    let mut visible = visible_objects(scene, &t, options, &mut stats);
+    let mut visible = visible_objects(scene, &t, options, None, &mut stats);
 
     // Vertices: world -> eye -> clip, outcodes, screen positions.
     let start = Instant::now();
