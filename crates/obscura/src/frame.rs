@@ -57,6 +57,31 @@ impl Frame {
         )
     }
 
+    /// Makes this frame `viewport`'s size for a renderer that writes every pixel of it
+    /// (its pixels are then unspecified): its memory is reused when it holds enough
+    /// pixels (nothing allocated, no page faulted in: the point of keeping a frame from
+    /// one render to the next), else it is replaced by [`Frame::zeroed`] (the old
+    /// memory freed first). An error as [`Frame::zeroed`]'s leaves the frame empty
+    /// (0x0).
+    pub(crate) fn reshape(&mut self, viewport: Viewport) -> Result<()> {
+        let n = viewport.pixel_count();
+        if self.ids.capacity() >= n && self.depth.capacity() >= n {
+            viewport.validate()?;
+            self.ids.resize(n, 0);
+            self.depth.resize(n, 0.0);
+            (self.width, self.height) = (viewport.width, viewport.height);
+            return Ok(());
+        }
+        *self = Frame {
+            width: 0,
+            height: 0,
+            ids: Vec::new(),
+            depth: Vec::new(),
+        };
+        *self = Self::zeroed(viewport)?;
+        Ok(())
+    }
+
     /// The frame's two buffers from the allocators (given the pixel count), after
     /// checking that the frame fits in memory; an error naming the size otherwise.
     fn allocate(

@@ -202,6 +202,56 @@ impl<K: PartialEq, T> Keyed<K, T> {
     }
 }
 
+/// A frame and the z-buffer's buffers kept from one render to the next, as a viewer or
+/// an engine keeps its render targets: rendering many views through
+/// [`SceneIndex::render_into`] or [`SceneIndex::render_culled_into`] then allocates
+/// nothing, and touches no fresh page, once the first frame of the largest size is
+/// drawn (a fresh 1920x1080 frame is 16.6 MB to fault in: several milliseconds). The
+/// frame of each render is exactly the one a fresh render gives, whatever the renderer
+/// drew before and at whatever size. Algorithms other than the z-buffer make their
+/// frame as usual; the renderer then holds it.
+#[derive(Debug)]
+pub struct Renderer {
+    frame: Frame,
+    zbuffer: surface::zbuffer::Buffers,
+}
+
+impl Default for Renderer {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Renderer {
+    /// A renderer holding nothing yet (an empty 0x0 frame; memory is taken on the
+    /// first render).
+    #[must_use]
+    pub fn new() -> Self {
+        Renderer {
+            frame: Frame {
+                width: 0,
+                height: 0,
+                ids: Vec::new(),
+                depth: Vec::new(),
+            },
+            zbuffer: surface::zbuffer::Buffers::new(),
+        }
+    }
+
+    /// The frame of the last render (0x0 before the first; unspecified after a render
+    /// that failed).
+    #[must_use]
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// The frame of the last render, the renderer given up.
+    #[must_use]
+    pub fn into_frame(self) -> Frame {
+        self.frame
+    }
+}
+
 /// The structures of one scene, each built once on first use and shared by every view
 /// and thread. See the [module documentation](self).
 pub struct SceneIndex<'s> {
@@ -532,13 +582,102 @@ impl<'s> SceneIndex<'s> {
         algorithm: Algorithm,
         options: &RenderOptions,
     ) -> Result<(Frame, Stats, crate::cull::occlusion::Culling)> {
-        let view = self.view_culled(camera, viewport, prepare, cull)?;
-        let culling = view
-            .culling()
-            .cloned()
-            .expect("a view made with a culling run keeps it");
-        let (frame, stats) = self.render_view(&view, algorithm, options)?;
+        let (view, culling) = self.view_and_culling(camera, viewport, prepare, cull)?;
+        let (frame, stats) = self.render_owned_view(view, algorithm, options)?;
         Ok((frame, stats, culling))
+    }
+
+    /// [`Self::view_culled`] and its decisions, taken out of the view (not copied).
+    fn view_and_culling(
+        &self,
+        camera: &crate::Camera,
+        viewport: crate::Viewport,
+        prepare: &PrepareOptions,
+        cull: &crate::cull::occlusion::CullOptions,
+    ) -> Result<(View<'s>, crate::cull::occlusion::Culling)> {
+        let mut view = self.view_culled(camera, viewport, prepare, cull)?;
+        let culling = view
+            .take_culling()
+            .expect("a view made with a culling run keeps it");
+        Ok((view, culling))
+    }
+
+    /// [`Self::render_view`] of a view given away: its polygons are built from it
+    /// without copying it.
+    fn render_owned_view(
+        &self,
+        view: View<'_>,
+        algorithm: Algorithm,
+        options: &RenderOptions,
+    ) -> Result<(Frame, Stats)> {
+        self.check_scene(&view)?;
+        if algorithm.needs_polygons() {
+            return self.render(&view.into_prepared(), algorithm, options);
+        }
+        surface::render_view_indexed(self, algorithm, &view, options)
+    }
+
+    /// [`Self::render`] into a [`Renderer`]'s kept frame and buffers: the same frame
+    /// and stats, but a renderer drawing many frames with the z-buffer allocates
+    /// nothing and faults in no memory after its first frame of the largest size.
+    /// Returns the frame (held by the renderer until its next render) and the stats.
+    ///
+    /// ```
+    /// use obscura::{Algorithm, PrepareOptions, RenderOptions, Renderer, SceneIndex, View, Viewport};
+    /// let scene = obscura::scene::demo::cube();
+    /// let index = SceneIndex::new(&scene);
+    /// let mut renderer = Renderer::new();
+    /// for (w, h) in [(64, 48), (32, 24)] {
+    ///     let vp = Viewport::new(w, h)?;
+    ///     let view = View::new(&scene, &scene.default_camera(vp.aspect()), vp, &PrepareOptions::default())?
+    ///         .into_prepared();
+    ///     let (frame, _) = index.render_into(&mut renderer, &view, Algorithm::ZBuffer, &RenderOptions::default())?;
+    ///     assert_eq!(*frame, index.render(&view, Algorithm::ZBuffer, &RenderOptions::default())?.0);
+    /// }
+    /// # Ok::<(), obscura::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Self::render`] (the renderer's frame is then unspecified).
+    pub fn render_into<'r>(
+        &self,
+        renderer: &'r mut Renderer,
+        view: &PreparedView<'_>,
+        algorithm: Algorithm,
+        options: &RenderOptions,
+    ) -> Result<(&'r Frame, Stats)> {
+        self.check_scene(view)?;
+        let Renderer { frame, zbuffer } = renderer;
+        let stats = surface::render_indexed_into(self, algorithm, view, options, frame, zbuffer)?;
+        Ok((frame, stats))
+    }
+
+    /// [`Self::render_culled`] into a [`Renderer`]'s kept frame and buffers (see
+    /// [`Self::render_into`]): the same frame, stats and decisions.
+    ///
+    /// # Errors
+    /// As [`Self::render_culled`] (the renderer's frame is then unspecified).
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_culled_into<'r>(
+        &self,
+        renderer: &'r mut Renderer,
+        camera: &crate::Camera,
+        viewport: crate::Viewport,
+        prepare: &PrepareOptions,
+        cull: &crate::cull::occlusion::CullOptions,
+        algorithm: Algorithm,
+        options: &RenderOptions,
+    ) -> Result<(&'r Frame, Stats, crate::cull::occlusion::Culling)> {
+        let (view, culling) = self.view_and_culling(camera, viewport, prepare, cull)?;
+        let stats = if algorithm.needs_polygons() {
+            self.render_into(renderer, &view.into_prepared(), algorithm, options)?
+                .1
+        } else {
+            let (frame, stats) = self.render_owned_view(view, algorithm, options)?;
+            renderer.frame = frame;
+            stats
+        };
+        Ok((&renderer.frame, stats, culling))
     }
 
     fn check_scene(&self, view: &View<'_>) -> Result<()> {

@@ -64,7 +64,7 @@ mod tests;
 
 pub use error::{Error, Result};
 pub use frame::{BACKGROUND, Frame, RgbImage};
-pub use index::SceneIndex;
+pub use index::{Renderer, SceneIndex};
 pub use scene::{Camera, Lens, Projection, Scene, Viewport};
 pub use surface::{Algorithm, RenderOptions, Stats, render};
 pub use view::{PrepareOptions, PreparedView, View, prepare};

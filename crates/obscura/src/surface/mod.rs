@@ -362,6 +362,32 @@ pub(crate) fn render_indexed(
     ))
 }
 
+/// [`render_indexed`] into kept memory: the z-buffer draws into `frame` with `buffers`
+/// ([`zbuffer::render_into`]); another algorithm's new frame replaces `frame`. The
+/// same frame and stats as [`render_indexed`].
+pub(crate) fn render_indexed_into(
+    index: &SceneIndex<'_>,
+    algorithm: Algorithm,
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+    frame: &mut Frame,
+    buffers: &mut zbuffer::Buffers,
+) -> Result<Stats> {
+    if algorithm != Algorithm::ZBuffer {
+        let (f, stats) = render_indexed(index, algorithm, view, options)?;
+        *frame = f;
+        return Ok(stats);
+    }
+    let start = Instant::now();
+    let options = &begin(algorithm, options, |o| estimate(algorithm, view, o))?;
+    check_budget(algorithm, view, options)?;
+    let stats = zbuffer::render_into(view, options, frame, buffers)?;
+    Ok(Stats::new(
+        AlgorithmStats::ZBuffer(stats),
+        start.elapsed().as_secs_f64() * 1e3,
+    ))
+}
+
 /// The options of a render starting now: its deadline started, ended at once when the
 /// limit is spent or the stop flag raised, and the work refused when `estimate` (only
 /// asked with a time limit) passes the time left (see [`crate::work`]).

@@ -310,6 +310,13 @@ impl<'s> View<'s> {
         self.culling.as_ref()
     }
 
+    /// Takes the occlusion stage's decisions out of the view (which then has none:
+    /// [`Self::culling`] is `None`), to keep them past it without copying their
+    /// per-face flags. What the view leaves out does not change.
+    pub fn take_culling(&mut self) -> Option<crate::cull::occlusion::Culling> {
+        self.culling.take()
+    }
+
     /// Per scene polygon, whether the view culls it: its object is outside the frustum
     /// or culled by the occlusion stage, or it is a back face or in a culled cluster.
     /// What the ray casters ignore.

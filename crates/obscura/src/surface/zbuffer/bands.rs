@@ -10,7 +10,7 @@ use crate::raster::{FillRule, sample_range};
 use crate::view::PreparedView;
 
 use super::Counts;
-use super::fast::{Band, TILE, draw_band};
+use super::fast::{Band, Scratch, TILE, draw_band};
 use crate::cpu::Kernel;
 
 /// Rows per band: one row of tiles.
@@ -64,7 +64,7 @@ fn bin(view: &PreparedView<'_>, range: std::ops::Range<usize>, bands: usize) -> 
     lists
 }
 
-/// Draws the view into the frame band by band, on `threads` threads when the
+/// Draws the view into the frame band by band (whatever the frame held before), on `threads` threads when the
 /// `parallel` feature is on (else, or with one thread, in order on this one).
 pub(super) fn draw_banded(
     view: &PreparedView<'_>,
@@ -95,7 +95,14 @@ pub(super) fn draw_banded(
             y0: b as u32 * BAND_ROWS,
         };
         let polys = lists.iter().flat_map(|l| l[b].iter().map(|&p| p as usize));
-        draw_band(view, polys, fill, kernel, &mut band)
+        draw_band(
+            view,
+            polys,
+            fill,
+            kernel,
+            &mut band,
+            &mut Scratch::default(),
+        )
     };
     #[cfg(feature = "parallel")]
     if threads > 1 {

@@ -232,8 +232,60 @@ fn draw_setup<L: Lanes>(
     }
 }
 
+/// The buffers of the drawing loop, kept from one frame to the next so that a renderer
+/// drawing many frames allocates (and faults in) nothing after the first: the bins of
+/// the tiles, the big polygons and their order, the tiles' cleared flags and the
+/// aligned tile buffer. Their contents never carry over: each band starts them empty.
+#[derive(Default)]
+pub(super) struct Scratch {
+    bins: Vec<Vec<u32>>,
+    big_triangles: Vec<(BlockSetup<3>, u32, f32)>,
+    big: Vec<(Setup, u32, f32)>,
+    order: Vec<(f32, u32)>,
+    /// Per tile of the band, whether its pixels in the band hold the empty buffer
+    /// (zero bits): set when the first small polygon reaching it clears it.
+    cleared: Vec<bool>,
+    tile: Option<Box<TileBuffer>>,
+}
+
+impl std::fmt::Debug for Scratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Scratch")
+            .field("tiles", &self.bins.len())
+            .field(
+                "big_capacity",
+                &(self.big_triangles.capacity() + self.big.capacity()),
+            )
+            .finish_non_exhaustive()
+    }
+}
+
+impl Scratch {
+    /// Empties every buffer for a band of `tiles` tiles (keeping their memory).
+    fn start(&mut self, tiles: usize) {
+        self.bins.truncate(tiles);
+        for bin in &mut self.bins {
+            bin.clear();
+        }
+        self.bins.resize_with(tiles, Vec::new);
+        self.big_triangles.clear();
+        self.big.clear();
+        self.order.clear();
+        self.cleared.clear();
+        self.cleared.resize(tiles, false);
+    }
+}
+
 /// Draws polygons `polygons` (indices into the view) into the band, then resolves the
 /// band's keys and ids into depths and face ids.
+///
+/// The band's pixels may hold anything on entry (a fresh frame's zero bits, or the
+/// previous frame of a reused one): nothing is read before it is written. A tile is
+/// cleared to the empty buffer (zero bits) in the band only when the first small
+/// polygon reaching it is drawn; a tile no small polygon reached is never read: its big
+/// polygons start from an empty tile buffer (in cache), and a tile with no polygon at
+/// all is written as background once. So the frame is written about once, and read
+/// only where small polygons drew.
 #[inline(always)]
 fn draw_band_impl<L: Lanes>(
     l: L,
@@ -241,6 +293,7 @@ fn draw_band_impl<L: Lanes>(
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
     band: &mut Band<'_>,
+    scratch: &mut Scratch,
 ) -> super::Counts {
     let start = std::time::Instant::now();
     let (_, _, faces) = view.polygon_arrays();
@@ -253,11 +306,17 @@ fn draw_band_impl<L: Lanes>(
     let y1 = whole.y1;
     let tiles_x = width.div_ceil(TILE) as usize;
     let tiles_y = (y1 - y0).div_ceil(TILE) as usize;
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); tiles_x * tiles_y];
+    scratch.start(tiles_x * tiles_y);
+    let Scratch {
+        bins,
+        big_triangles,
+        big,
+        order,
+        cleared,
+        tile: tile_buffer,
+    } = scratch;
     // Big polygons: triangles (bin entries below OTHER), and the others.
     // Each with its face and its nearest key.
-    let mut big_triangles: Vec<(BlockSetup<3>, u32, f32)> = Vec::new();
-    let mut big: Vec<(Setup, u32, f32)> = Vec::new();
     let (starts, indices, _) = view.polygon_arrays();
     let vertices = view.vertices();
     let is_big = |r: PixelRect| r.x1 - r.x0 > BIG || r.y1 - r.y0 > BIG;
@@ -278,7 +337,35 @@ fn draw_band_impl<L: Lanes>(
             }
         }
     };
-    let mut scratch = PolygonSetup::<16>::new();
+    // The pixels of tile `(tx, ty)` of the band.
+    let tile_rect = |tx: usize, ty: usize| PixelRect {
+        x0: tx as u32 * TILE,
+        y0: y0 + ty as u32 * TILE,
+        x1: ((tx as u32 + 1) * TILE).min(width),
+        y1: (y0 + (ty as u32 + 1) * TILE).min(y1),
+    };
+    // Before a small polygon (rectangle `r`, inside the band's rows) is drawn: the
+    // tiles it reaches that are not cleared yet, cleared.
+    let clear_tiles = |target: &mut BlockTarget<'_>, cleared: &mut [bool], r: PixelRect| {
+        let (xs, ys) = tiles_of(r);
+        for ty in ys {
+            for tx in xs.clone() {
+                let done = &mut cleared[ty * tiles_x + tx];
+                if *done {
+                    continue;
+                }
+                *done = true;
+                let t = tile_rect(tx, ty);
+                let n = (t.x1 - t.x0) as usize;
+                for y in t.y0..t.y1 {
+                    let (k, i) = target.row_mut(t.x0, y, n);
+                    k.fill(0.0);
+                    i.fill(0);
+                }
+            }
+        }
+    };
+    let mut setup_scratch = PolygonSetup::<16>::new();
     let mut counts = Counts::default();
     let mut drawn = 0u64;
     // Triangles, most polygons of most scenes, are set up eight at a time (the other
@@ -333,6 +420,7 @@ fn draw_band_impl<L: Lanes>(
                 if is_big(rect) {
                     big_triangles.push((t, face, block::nearest_key(&t, rect)));
                 } else {
+                    clear_tiles(&mut target, cleared, rect);
                     block::draw(l, &t, whole, Align::Polygon, &mut target, face, &mut counts);
                 }
             }
@@ -340,7 +428,7 @@ fn draw_band_impl<L: Lanes>(
         }
         // Other polygons, one by one.
         if let Some(p) = other
-            && let Some(s) = setup(view, p, fill, width, height, &mut scratch)
+            && let Some(s) = setup(view, p, fill, width, height, &mut setup_scratch)
         {
             let rect = s.rect();
             // A polygon reaching several bands is counted by the band of its first row.
@@ -353,6 +441,7 @@ fn draw_band_impl<L: Lanes>(
                     let near = s.nearest_key();
                     big.push((s, face, near));
                 } else {
+                    clear_tiles(&mut target, cleared, rect);
                     draw_setup(l, &s, whole, Align::Polygon, &mut target, face, &mut counts);
                 }
             }
@@ -365,59 +454,73 @@ fn draw_band_impl<L: Lanes>(
     // The big polygons into the bins of their tiles nearest first (one sort for all
     // bins), so that each tile draws them nearest first: the blocks they fill hide
     // the polygons behind them.
-    let mut order: Vec<(f32, u32)> = big_triangles
-        .iter()
-        .enumerate()
-        .map(|(k, b)| (b.2, k as u32))
-        .chain(big.iter().enumerate().map(|(k, b)| (b.2, OTHER | k as u32)))
-        .collect();
+    order.extend(
+        big_triangles
+            .iter()
+            .enumerate()
+            .map(|(k, b)| (b.2, k as u32))
+            .chain(big.iter().enumerate().map(|(k, b)| (b.2, OTHER | k as u32))),
+    );
     order.sort_by(|a, b| b.0.total_cmp(&a.0));
-    for &(_, k) in &order {
+    for &(_, k) in order.iter() {
         let rect = if k & OTHER == 0 {
             big_triangles[k as usize].0.rect
         } else {
             big[(k & !OTHER) as usize].0.rect()
         };
-        put_in_bins(&mut bins, rect, k);
+        put_in_bins(bins, rect, k);
     }
     let binned = std::time::Instant::now();
     let depth = view.transform().key_depths();
-    let mut tile_buffer = Box::new(TileBuffer {
-        keys: [0.0; (TILE * TILE) as usize],
-        ids: [0; (TILE * TILE) as usize],
-        farthest: [0.0; FAR_BLOCKS],
+    let tb = &mut **tile_buffer.get_or_insert_with(|| {
+        Box::new(TileBuffer {
+            keys: [0.0; (TILE * TILE) as usize],
+            ids: [0; (TILE * TILE) as usize],
+            farthest: [0.0; FAR_BLOCKS],
+        })
     });
     let (keys, ids) = (&mut *band.keys, &mut *band.ids);
-    for ty in 0..tiles_y as u32 {
-        for tx in 0..tiles_x as u32 {
-            let tile = PixelRect {
-                x0: tx * TILE,
-                y0: y0 + ty * TILE,
-                x1: ((tx + 1) * TILE).min(width),
-                y1: (y0 + (ty + 1) * TILE).min(y1),
-            };
+    for ty in 0..tiles_y {
+        for tx in 0..tiles_x {
+            let tile = tile_rect(tx, ty);
             let n = (tile.x1 - tile.x0) as usize;
-            if bins[ty as usize * tiles_x + tx as usize].is_empty() {
+            let (bin, was_cleared) = (&bins[ty * tiles_x + tx], cleared[ty * tiles_x + tx]);
+            if bin.is_empty() {
                 for y in tile.y0..tile.y1 {
                     let at = (y - y0) as usize * w + tile.x0 as usize;
-                    l.resolve_in_place(&mut keys[at..at + n], &mut ids[at..at + n], depth);
+                    let (k, i) = (&mut keys[at..at + n], &mut ids[at..at + n]);
+                    if was_cleared {
+                        l.resolve_in_place(k, i, depth);
+                    } else {
+                        // What resolving the empty buffer gives.
+                        k.fill(f32::INFINITY);
+                        i.fill(crate::frame::BACKGROUND);
+                    }
                 }
                 continue;
             }
-            // The tile's pixels into the aligned buffer, its big polygons drawn there
-            // (in cache), then resolved back into the frame.
-            let tb = &mut *tile_buffer;
-            for y in tile.y0..tile.y1 {
-                let at = (y - y0) as usize * w + tile.x0 as usize;
-                let t = (y - tile.y0) as usize * TILE as usize;
-                tb.keys[t..t + n].copy_from_slice(&keys[at..at + n]);
-                tb.ids[t..t + n].copy_from_slice(&ids[at..at + n]);
-            }
             let rows = (tile.y1 - tile.y0) as usize * TILE as usize;
-            // Columns past the image's edge hold stale keys: no block there is culled.
-            if n == TILE as usize {
-                farthest_keys(&tb.keys, (tile.y1 - tile.y0) as usize, &mut tb.farthest);
+            if was_cleared {
+                // The tile's pixels into the aligned buffer, its big polygons drawn
+                // there (in cache), then resolved back into the frame.
+                for y in tile.y0..tile.y1 {
+                    let at = (y - y0) as usize * w + tile.x0 as usize;
+                    let t = (y - tile.y0) as usize * TILE as usize;
+                    tb.keys[t..t + n].copy_from_slice(&keys[at..at + n]);
+                    tb.ids[t..t + n].copy_from_slice(&ids[at..at + n]);
+                }
+                // Columns past the image's edge hold stale keys: no block there is
+                // culled.
+                if n == TILE as usize {
+                    farthest_keys(&tb.keys, (tile.y1 - tile.y0) as usize, &mut tb.farthest);
+                } else {
+                    tb.farthest = [0.0; FAR_BLOCKS];
+                }
             } else {
+                // No small polygon drew here: the empty buffer, made in cache (what
+                // copying the cleared pixels in would give, and its farthest keys).
+                tb.keys[..rows].fill(0.0);
+                tb.ids[..rows].fill(0);
                 tb.farthest = [0.0; FAR_BLOCKS];
             }
             let Some(t) = BlockTarget::new(
@@ -431,7 +534,7 @@ fn draw_band_impl<L: Lanes>(
             };
             let mut t = t.with_farthest(&mut tb.farthest);
             // Nearest first (the bins' order).
-            for &k in &bins[ty as usize * tiles_x + tx as usize] {
+            for &k in bin {
                 if k & OTHER == 0 {
                     let (s, face, _) = &big_triangles[k as usize];
                     block::draw(l, s, tile, Align::Grid, &mut t, *face, &mut counts);
@@ -468,8 +571,9 @@ fn draw_band_portable(
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
     band: &mut Band<'_>,
+    scratch: &mut Scratch,
 ) -> super::Counts {
-    draw_band_impl(Portable, view, polygons, fill, band)
+    draw_band_impl(Portable, view, polygons, fill, band, scratch)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -480,8 +584,9 @@ fn draw_band_avx2(
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
     band: &mut Band<'_>,
+    scratch: &mut Scratch,
 ) -> super::Counts {
-    draw_band_impl(Portable, view, polygons, fill, band)
+    draw_band_impl(Portable, view, polygons, fill, band, scratch)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -492,8 +597,9 @@ fn draw_band_avx512(
     polygons: impl Iterator<Item = usize>,
     fill: FillRule,
     band: &mut Band<'_>,
+    scratch: &mut Scratch,
 ) -> super::Counts {
-    draw_band_impl(l, view, polygons, fill, band)
+    draw_band_impl(l, view, polygons, fill, band, scratch)
 }
 
 /// Draws `polygons` into the band with the kernel (the best one below it if the
@@ -505,27 +611,30 @@ pub(super) fn draw_band(
     fill: FillRule,
     kernel: Kernel,
     band: &mut Band<'_>,
+    scratch: &mut Scratch,
 ) -> super::Counts {
     #[cfg(target_arch = "x86_64")]
     {
         if let Some(l) = kernel.avx512() {
             // SAFETY: `Avx512::new` checked every feature `draw_band_avx512` enables.
-            return unsafe { draw_band_avx512(l, view, polygons, fill, band) };
+            return unsafe { draw_band_avx512(l, view, polygons, fill, band, scratch) };
         }
         if let Some(cpu) = kernel.avx2() {
             // SAFETY: `Avx2::new` checked every feature `draw_band_avx2` enables.
-            return unsafe { draw_band_avx2(cpu, view, polygons, fill, band) };
+            return unsafe { draw_band_avx2(cpu, view, polygons, fill, band, scratch) };
         }
     }
-    draw_band_portable(view, polygons, fill, band)
+    draw_band_portable(view, polygons, fill, band, scratch)
 }
 
-/// Draws every polygon of the view into the whole frame on this thread.
+/// Draws every polygon of the view into the whole frame on this thread (whatever the
+/// frame held before), with the buffers of `scratch`.
 pub(super) fn draw_all(
     view: &PreparedView<'_>,
     fill: FillRule,
     kernel: Kernel,
     frame: &mut Frame,
+    scratch: &mut Scratch,
 ) -> super::Counts {
     let mut band = Band {
         keys: &mut frame.depth,
@@ -534,5 +643,12 @@ pub(super) fn draw_all(
         height: frame.height,
         y0: 0,
     };
-    draw_band(view, 0..view.polygon_count(), fill, kernel, &mut band)
+    draw_band(
+        view,
+        0..view.polygon_count(),
+        fill,
+        kernel,
+        &mut band,
+        scratch,
+    )
 }

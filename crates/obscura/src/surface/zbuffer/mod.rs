@@ -37,7 +37,11 @@
 //!   nearest first and skip the blocks whose farthest key is nearer than any of
 //!   theirs (exact: such a polygon wins no pixel there, not even a tie; Greene, Kass
 //!   and Miller, *Hierarchical Z-buffer visibility*, SIGGRAPH 1993);
-//! - a frame of zero bits as the empty buffer (fresh pages, nothing to clear);
+//! - a frame of zero bits as the empty buffer, cleared lazily: a 64x64 tile of the frame
+//!   is cleared when the first small polygon reaches it, a tile only big polygons reach
+//!   starts from an empty tile buffer in cache, and a tile no polygon reaches is written
+//!   as background once; so a new frame's pages are first touched where it is drawn,
+//!   and a kept frame ([`render_into`], [`Buffers`]) needs no clearing pass;
 //! - the kernels compiled for AVX2 or AVX-512 when the processor has them (chosen at
 //!   run time; the same operations in the same order, so the same bits, as the
 //!   portable build: the tests compare them);
@@ -81,6 +85,60 @@ pub fn render(view: &PreparedView<'_>, options: &RenderOptions) -> Result<(Frame
     render_with(view, options, Kernel::detect(), bands::thread_count())
 }
 
+/// The buffers the z-buffer keeps from one frame to the next: the bins of its tiles, its
+/// big polygons and their order, and its tile buffer. With [`render_into`] and a kept
+/// [`Frame`], a renderer drawing many frames (a viewer, a walk, a benchmark) allocates
+/// nothing and faults in no page after the first frame, as engines keep their render
+/// targets. The contents never carry over from one frame to the next.
+#[derive(Debug, Default)]
+pub struct Buffers(fast::Scratch);
+
+impl Buffers {
+    /// Empty buffers (they grow on first use).
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// [`render`] into an existing frame with kept buffers: the frame is made the size of
+/// the view's viewport (reusing its memory when it holds enough pixels, else replaced
+/// by a new one) and drawn whole, so it ends exactly as the frame [`render`] returns,
+/// whatever it held before (another view's picture, another size). On an error its
+/// contents are unspecified.
+///
+/// ```
+/// use obscura::{scene::{demo, Viewport}, view::{prepare, PrepareOptions}, Frame};
+/// use obscura::surface::{zbuffer, RenderOptions};
+/// let scene = demo::cube();
+/// let vp = Viewport::new(64, 48).unwrap();
+/// let view = prepare(&scene, &scene.default_camera(vp.aspect()), vp, &PrepareOptions::default()).unwrap();
+/// let mut frame = Frame::new(Viewport::new(8, 8).unwrap()).unwrap();
+/// let mut buffers = zbuffer::Buffers::new();
+/// for _ in 0..2 {
+///     zbuffer::render_into(&view, &RenderOptions::default(), &mut frame, &mut buffers).unwrap();
+/// }
+/// assert_eq!(frame, zbuffer::render(&view, &RenderOptions::default()).unwrap().0);
+/// ```
+///
+/// # Errors
+/// As [`render`].
+pub fn render_into(
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+    frame: &mut Frame,
+    buffers: &mut Buffers,
+) -> Result<ZBufferStats> {
+    render_into_with(
+        view,
+        options,
+        Kernel::detect(),
+        bands::thread_count(),
+        frame,
+        buffers,
+    )
+}
+
 /// Renders with a chosen kernel and number of threads (1 draws on the calling thread;
 /// more need the `parallel` feature and draw on rayon's current pool). For tests and
 /// benchmarks that compare kernels; [`render`] picks the best.
@@ -90,12 +148,29 @@ pub fn render_with(
     kernel: Kernel,
     threads: usize,
 ) -> Result<(Frame, ZBufferStats)> {
-    let schedule = if threads > 1 {
+    render_scheduled(view, options, kernel, threads, schedule_of(threads))
+}
+
+/// [`render_into`] with a chosen kernel and number of threads (see [`render_with`]).
+fn render_into_with(
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+    kernel: Kernel,
+    threads: usize,
+    frame: &mut Frame,
+    buffers: &mut Buffers,
+) -> Result<ZBufferStats> {
+    let schedule = schedule_of(threads);
+    render_scheduled_into(view, options, kernel, threads, schedule, frame, buffers)
+}
+
+/// Bands of rows for several threads, else the whole frame at once.
+fn schedule_of(threads: usize) -> Schedule {
+    if threads > 1 {
         Schedule::Bands
     } else {
         Schedule::Whole
-    };
-    render_scheduled(view, options, kernel, threads, schedule)
+    }
 }
 
 /// How the frame is cut into units of work.
@@ -107,6 +182,8 @@ enum Schedule {
     Bands,
 }
 
+/// A new frame drawn with the schedule (a fresh frame of zero bits: its pages are first
+/// touched where the drawing first writes them).
 fn render_scheduled(
     view: &PreparedView<'_>,
     options: &RenderOptions,
@@ -114,27 +191,45 @@ fn render_scheduled(
     threads: usize,
     schedule: Schedule,
 ) -> Result<(Frame, ZBufferStats)> {
+    let mut frame = Frame::zeroed(view.viewport())?;
+    let buffers = &mut Buffers::default();
+    let stats = render_scheduled_into(
+        view, options, kernel, threads, schedule, &mut frame, buffers,
+    )?;
+    Ok((frame, stats))
+}
+
+/// Draws the view into `frame` (reshaped to its viewport) with the schedule.
+fn render_scheduled_into(
+    view: &PreparedView<'_>,
+    options: &RenderOptions,
+    kernel: Kernel,
+    threads: usize,
+    schedule: Schedule,
+    frame: &mut Frame,
+    buffers: &mut Buffers,
+) -> Result<ZBufferStats> {
     let bands = match schedule {
         Schedule::Bands => view.viewport().height.div_ceil(bands::BAND_ROWS),
         Schedule::Whole => 1,
     };
     check_budget(view, options, bands)?;
-    let mut frame = Frame::zeroed(view.viewport())?;
+    frame.reshape(view.viewport())?;
     let counts = if schedule == Schedule::Bands {
         bands::draw_banded(
             view,
             options.fill_rule,
             kernel,
             threads,
-            &mut frame,
+            frame,
             &options.deadline,
         )
     } else {
-        fast::draw_all(view, options.fill_rule, kernel, &mut frame)
+        fast::draw_all(view, options.fill_rule, kernel, frame, &mut buffers.0)
     };
     // Bands skipped past the deadline leave the frame unfinished: never returned.
     options.check_time("z-buffer bands")?;
-    Ok((frame, counts.fast_stats(view)))
+    Ok(counts.fast_stats(view))
 }
 
 /// The structure named by the z-buffer's budget errors.

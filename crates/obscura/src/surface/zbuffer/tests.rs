@@ -416,3 +416,58 @@ fn big_polygons_and_phase_times_are_reported() {
         }
     }
 }
+
+/// A kept frame and buffers ([`render_into`]) give exactly the frame, depths and counts
+/// of a fresh render, whatever they held: views of different scenes one after another
+/// at sizes growing, shrinking and growing again (within the kept memory and past it),
+/// with one and several threads. Between renders the kept frame is also filled with
+/// poison (keys nearer than any polygon's, non-zero ids): a pixel read before it is
+/// written would show it.
+#[test]
+fn a_kept_frame_gives_the_fresh_frame_after_any_view_and_size() {
+    let scenes = [
+        demo::default_scene(),
+        demo::city(6, 5, 9),
+        random_triangles(150, 3, 1.0, 0.4),
+    ];
+    let sizes: [(u32, u32); 6] = [
+        (97, 61),
+        (200, 150),
+        (70, 150),
+        (33, 17),
+        (200, 149),
+        (257, 190),
+    ];
+    for kernel in kernels() {
+        for threads in [1, 2] {
+            for poison in [false, true] {
+                let mut frame = Frame {
+                    width: 2,
+                    height: 1,
+                    ids: vec![7, 8],
+                    depth: vec![1e30, 1e30],
+                };
+                let mut buffers = Buffers::new();
+                for (k, &(w, h)) in sizes.iter().enumerate() {
+                    let scene = &scenes[k % scenes.len()];
+                    let vp = Viewport::new(u64::from(w), u64::from(h)).unwrap();
+                    let cam = orbit_cameras(scene, 1, 40 + k as u64)[0];
+                    let view = prepare(scene, &cam, vp, &PrepareOptions::default()).unwrap();
+                    let opts = RenderOptions::default();
+                    let fresh = render_with(&view, &opts, kernel, threads).unwrap();
+                    let stats =
+                        render_into_with(&view, &opts, kernel, threads, &mut frame, &mut buffers)
+                            .unwrap();
+                    let what = format!("{kernel:?}, {threads} threads, poison {poison}, {w}x{h}");
+                    assert_eq!((frame.width, frame.height), (w, h), "{what}");
+                    assert!(fresh.0.covered_pixels() > 0, "{what}: an empty picture");
+                    assert_identical(&(frame.clone(), stats), &fresh, &what);
+                    if poison {
+                        frame.depth.fill(1e30);
+                        frame.ids.fill(3);
+                    }
+                }
+            }
+        }
+    }
+}
