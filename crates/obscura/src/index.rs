@@ -739,6 +739,63 @@ mod tests {
         assert_eq!(index.builds().adjacency, 1);
     }
 
+    /// One renderer through views of every culling method, algorithms with and
+    /// without polygons and sizes growing and shrinking gives each time the frame,
+    /// decisions and counts of a fresh render.
+    #[test]
+    fn a_renderer_gives_the_frames_of_fresh_renders() {
+        use crate::cull::occlusion::{CullMethod, CullOptions};
+        let scene = demo::city(8, 6, 3);
+        let index = SceneIndex::new(&scene);
+        let mut renderer = Renderer::new();
+        assert_eq!(renderer.frame().ids.len(), 0);
+        let prep = PrepareOptions::default();
+        let ro = RenderOptions::default();
+        let sizes = [(160, 90), (320, 200), (97, 61), (320, 201)];
+        let mut covered = 0;
+        for (k, method) in CullMethod::ALL.into_iter().enumerate() {
+            for (j, &(w, h)) in sizes.iter().enumerate() {
+                let vp = crate::Viewport::new(w, h).unwrap();
+                let camera = crate::scene::random::orbit_cameras(&scene, 1, (k * 7 + j) as u64)[0];
+                let algorithm = if j == 2 {
+                    Algorithm::RaycastBvh
+                } else {
+                    Algorithm::ZBuffer
+                };
+                let cull = CullOptions::with_method(method);
+                let (fresh, fresh_stats, fresh_culling) = index
+                    .render_culled(&camera, vp, &prep, &cull, algorithm, &ro)
+                    .unwrap();
+                let (frame, stats, culling) = index
+                    .render_culled_into(&mut renderer, &camera, vp, &prep, &cull, algorithm, &ro)
+                    .unwrap();
+                let what = format!("{}, {w}x{h}, {algorithm}", method.name());
+                assert!(*frame == fresh, "{what}: the kept frame differs");
+                assert_eq!(culling.faces, fresh_culling.faces, "{what}");
+                assert_eq!(culling.objects, fresh_culling.objects, "{what}");
+                let counts = |s: &Stats| {
+                    s.zbuffer()
+                        .map(|z| (z.polygons, z.polygons_drawn, z.pixels_written))
+                };
+                assert_eq!(counts(&stats), counts(&fresh_stats), "{what}");
+                covered += fresh.covered_pixels();
+                // And a prepared view of its own.
+                let view = View::new(&scene, &camera, vp, &prep)
+                    .unwrap()
+                    .into_prepared();
+                let (frame, _) = index
+                    .render_into(&mut renderer, &view, algorithm, &ro)
+                    .unwrap();
+                assert!(
+                    *frame == fresh,
+                    "{what}: the kept frame of the plain view differs"
+                );
+            }
+        }
+        assert!(covered > 100_000, "the views must show the city: {covered}");
+        assert_eq!(renderer.into_frame().width, 320);
+    }
+
     #[test]
     fn structures_built_by_other_options_are_kept_apart() {
         let scene = demo::cube();
