@@ -50,6 +50,7 @@ mod target;
 #[cfg(test)]
 mod tests;
 
+pub(crate) use occlusion::min16;
 pub use occlusion::nearest_key;
 pub use resolve::resolve;
 #[cfg(test)]

@@ -76,9 +76,28 @@ impl BlockTarget<'_> {
             }
         }
         if let Some(far) = self.farthest.get_mut(at) {
-            *far = m.into_iter().fold(f32::INFINITY, f32::min);
+            *far = min16(m);
         }
     }
+}
+
+/// The smallest of sixteen keys, halving the lanes (vector instructions; the serial
+/// fold with `f32::min` took 9 % of a culled city frame's z-buffer). The same value as
+/// that fold for keys without NaN, which the buffers never hold (the depth test
+/// stores no NaN; their empty value is `+0.0`).
+#[inline(always)]
+#[must_use]
+pub(crate) fn min16(mut m: [f32; 16]) -> f32 {
+    for half in [8, 4, 2, 1] {
+        for i in 0..half {
+            m[i] = if m[i + half] < m[i] {
+                m[i + half]
+            } else {
+                m[i]
+            };
+        }
+    }
+    m[0]
 }
 
 /// An upper bound of the keys the rasterizer computes for polygon `s` in the pixels

@@ -286,3 +286,26 @@ fn nearest_key_bounds_every_key_of_the_rectangle() {
     };
     assert!(nearest_key(&nan, nan.rect).is_nan());
 }
+
+/// The halving minimum equals the serial `f32::min` fold on keys as the buffers hold
+/// them (zero, positive, infinite; any order), the minimum anywhere among the lanes.
+#[test]
+fn min16_is_the_smallest_lane() {
+    let mut rng = crate::rng::SplitMix64(16);
+    for k in 0..2000 {
+        let mut m = [0.0f32; 16];
+        for v in &mut m {
+            *v = match rng.range(0.0, 4.0) as u32 {
+                0 => 0.0,
+                1 => f32::INFINITY,
+                _ => rng.range(1e-6, 10.0) as f32,
+            };
+        }
+        // Every position once the smallest, zero or not.
+        if k % 2 == 0 {
+            m[k / 2 % 16] = 1e-9;
+        }
+        let fold = m.into_iter().fold(f32::INFINITY, f32::min);
+        assert_eq!(super::min16(m).to_bits(), fold.to_bits(), "{m:?}");
+    }
+}

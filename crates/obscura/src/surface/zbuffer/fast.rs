@@ -98,7 +98,7 @@ fn farthest_keys(keys: &[f32], rows: usize, farthest: &mut [f32; FAR_BLOCKS]) {
                 *m = if v < *m { v } else { *m };
             }
         }
-        *far = m.into_iter().fold(f32::INFINITY, f32::min);
+        *far = block::min16(m);
     }
 }
 
