@@ -9,6 +9,9 @@
 //! - Sponza, when `../shared/data/sponza.obj` (relative to the workspace) exists;
 //! - the reference implementation on the city, for comparison.
 //!
+//! `render` draws a new frame each time (its memory faulted in); `render_into` draws
+//! into a kept frame with kept buffers ([`zbuffer::render_into`]).
+//!
 //! Run: `cargo bench -p obscura --bench zbuffer` (threads: `RAYON_NUM_THREADS=1` for
 //! single-thread figures).
 
@@ -59,6 +62,14 @@ fn bench(c: &mut Criterion) {
         g.throughput(Throughput::Elements(covered));
         g.bench_function("render", |b| {
             b.iter(|| zbuffer::render(&view, &opts).expect("rendered"))
+        });
+        // Into a kept frame with kept buffers, as a viewer renders frame after frame.
+        let mut frame = zbuffer::render(&view, &opts).expect("rendered").0;
+        let mut buffers = zbuffer::Buffers::new();
+        g.bench_function("render_into", |b| {
+            b.iter(|| {
+                zbuffer::render_into(&view, &opts, &mut frame, &mut buffers).expect("rendered")
+            })
         });
         if name == "city" {
             g.bench_function("render_reference", |b| {
