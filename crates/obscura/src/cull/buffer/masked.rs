@@ -86,6 +86,11 @@ impl MaskedBuffer {
     pub fn draw(&mut self, tris: &[Tri], kernel: Kernel) {
         #[cfg(target_arch = "x86_64")]
         {
+            if let Some(cpu) = kernel.avx512() {
+                // SAFETY: `Avx512::new` checked every feature `draw_avx512` enables.
+                unsafe { draw_avx512(cpu, self, tris) };
+                return;
+            }
             if let Some(cpu) = kernel.avx2() {
                 // SAFETY: `Avx2::new` checked every feature `draw_avx2` enables.
                 unsafe { draw_avx2(cpu, self, tris) };
@@ -174,13 +179,152 @@ impl MaskedBuffer {
     }
 }
 
-/// The lanes an edge's coverage of a tile is computed with: portable scalar code, or
-/// AVX2 (eight pixels of a tile row at once). Both run the same `f32` operations in the
-/// same order (`row + a * dx`, then `> 0`), so they give the same bits.
+/// A triangle set up once for the tile loop: every value `f32`, the margins for the
+/// rounding of the loop folded into the constants (see [`tile_setup`]), so a tile costs
+/// its three edge values, one vector evaluation of 32 pixels per edge and one depth.
+#[derive(Clone, Copy, Debug)]
+struct TileSetup {
+    /// Tiles `tx0 ..= tx1`, `ty0 ..= ty1`.
+    tx0: usize,
+    ty0: usize,
+    tx1: usize,
+    ty1: usize,
+    /// Per edge, its value at the first tile's corner pixel less the margin.
+    e: [f32; 3],
+    /// Per edge, its step from one tile to the next in x (`8 a`) and in y (`4 b`).
+    ex: [f32; 3],
+    ey: [f32; 3],
+    /// Per edge, its slopes `a` and `b` in `f32`: the step from a tile's corner pixel
+    /// to its pixel `(dx, dy)` is `a dx + b dy` ([`Lanes::offsets`]).
+    a: [f32; 3],
+    b: [f32; 3],
+    /// The depth-key bound at the first tile (the plane's least over the tile, less the
+    /// margins), its steps per tile, and the floor every bound may take (the farthest
+    /// vertex's key less the slack).
+    z: f32,
+    zx: f32,
+    zy: f32,
+    zmin: f32,
+}
+
+/// The margin, relative to the magnitudes the loop adds up, that covers every rounding
+/// of the tile loop in `f32` (seven roundings of at most `2^-24` each, and the
+/// rounding of the slopes to `f32`: at most `8 * 2^-24 = 2^-21`; a factor four
+/// beyond).
+const F32_LOOP: f64 = 1.0 / (1u64 << 19) as f64;
+/// The margin, relative to the magnitudes of the set-up, that covers its rounding in
+/// `f64` (a few roundings of `2^-53` each: `2^-48` is a factor ten beyond).
+const F64_SETUP: f64 = 1.0 / (1u64 << 48) as f64;
+
+/// Sets up triangle `s` for the tile loop, or `None` when a value is not finite
+/// (leaving a triangle out is conservative).
+///
+/// Why a pixel the loop marks covered is covered (every sample inside). Let `F(X, Y) =
+/// a X + b Y + c` be the set-up's edge function (exact reals: positive at a pixel's
+/// corner means its whole sample square is inside, see [`super::raster`]), `(X0, Y0)`
+/// the first tile's corner, `W` and `H` the extent of the tiles in pixels and `S = |G|
+/// + |a| W + |b| H` with `G = F(X0, Y0)`. The loop computes, for the pixel `(X0 + u, Y0
+/// + v)` (`u < W`, `v < H`), `((e + ey j) + ex i) + off` in `f32` with `e <= G - M`,
+/// the slopes `af = f32(a)` (`|a - af| <= 2^-24 |a|`, scaled exactly by 8 and 4) and the
+/// offsets `af dx + bf dy`. Each of its seven roundings errs by at most `2^-24` of a
+/// sum of terms bounded by `|e| + |af| u + |bf| v <= 2 S`, and the slopes' rounding
+/// adds at most `2^-24 (|a| W + |b| H)`: in all below `2^-20 S`. The value `G` itself,
+/// computed in `f64` from the set-up (whose own `a`, `b`, `c` carry rounding relative
+/// `2^-52` to the vertices'), errs by less than `2^-48 T` with `T` the magnitudes
+/// that made it (`cmag`). With `M = 2^-19 S + 2^-48 T`, a computed value above zero
+/// means `F > M - 2^-20 S - 2^-48 T > 0` at the pixel: every sample inside.
+///
+/// The depth the same way: the loop computes `(z + zy j) + zx i`, `z` rounded down
+/// from the plane's least value over the first tile (`P(X0, Y0) + min(p, 0) wx +
+/// min(q, 0) wy`, every sample of its pixels) less the set-up's slack and a margin
+/// `2^-19 (|z| + |p| W + |q| H)` for the loop's five roundings and the slopes'; the
+/// plane is affine, so the least over tile `(i, j)` is the first tile's plus `8 p i + 4
+/// q j`. The floor `zmin` (the farthest vertex's key, no key of the triangle is
+/// farther) is rounded down too; so the bound never passes the triangle's key.
+#[inline(always)]
+fn tile_setup(s: &Setup, r: f64) -> Option<TileSetup> {
+    let (tx0, tx1) = (s.x0 as usize / TW, s.x1 as usize / TW);
+    let (ty0, ty1) = (s.y0 as usize / TH, s.y1 as usize / TH);
+    let (x0, y0) = ((tx0 * TW) as f64, (ty0 * TH) as f64);
+    let w = ((tx1 - tx0 + 1) * TW) as f64;
+    let h = ((ty1 - ty0 + 1) * TH) as f64;
+    let mut e = [0.0f32; 3];
+    let mut ex = [0.0f32; 3];
+    let mut ey = [0.0f32; 3];
+    let mut af = [0.0f32; 3];
+    let mut bf = [0.0f32; 3];
+    let mut bounded = true;
+    for k in 0..3 {
+        let (a, b) = (s.a[k], s.b[k]);
+        let g = a * x0 + b * y0 + s.c[k];
+        let sum = g.abs() + a.abs() * w + b.abs() * h;
+        bounded &= sum < 1e30;
+        let m = F32_LOOP * sum + F64_SETUP * (s.cmag[k] + a.abs() * x0 + b.abs() * y0);
+        e[k] = f32_down(g - m);
+        af[k] = a as f32;
+        bf[k] = b as f32;
+        ex[k] = af[k] * TW as f32;
+        ey[k] = bf[k] * TH as f32;
+    }
+    let wx = TW as f64 - 1.0 + r;
+    let wy = TH as f64 - 1.0 + r;
+    let plane = s.p * x0 + s.q * y0 + s.r + s.p.min(0.0) * wx + s.q.min(0.0) * wy - s.zslack;
+    let zsum = plane.abs() + s.p.abs() * w + s.q.abs() * h;
+    bounded &= zsum < 1e30 && s.zmin.abs() + s.zslack < 1e30;
+    let zm = F32_LOOP * zsum;
+    let (pf, qf) = (s.p as f32, s.q as f32);
+    let t = TileSetup {
+        tx0,
+        ty0,
+        tx1,
+        ty1,
+        e,
+        ex,
+        ey,
+        a: af,
+        b: bf,
+        z: f32_down(plane - zm),
+        zx: pf * TW as f32,
+        zy: qf * TH as f32,
+        zmin: f32_down(s.zmin - s.zslack),
+    };
+    // Every magnitude the loop adds up stays far from `f32`'s overflow (`<` fails on
+    // NaN too), so the bounds above hold for every value it computes.
+    bounded.then_some(t)
+}
+
+/// Per pixel of a tile (`dy * 8 + dx`), its `dx` and `dy`.
+const DX: [f32; TW * TH] = {
+    let mut v = [0.0; TW * TH];
+    let mut p = 0;
+    while p < TW * TH {
+        v[p] = (p % TW) as f32;
+        p += 1;
+    }
+    v
+};
+const DY: [f32; TW * TH] = {
+    let mut v = [0.0; TW * TH];
+    let mut p = 0;
+    while p < TW * TH {
+        v[p] = (p / TW) as f32;
+        p += 1;
+    }
+    v
+};
+
+/// The lanes a tile's coverage is computed with: portable scalar code, AVX2 (eight
+/// pixels at once) or AVX-512 (sixteen). All run the same `f32` operations (`e + off`,
+/// then `> 0`), so they give the same bits.
 trait Lanes: Copy {
-    /// The coverage of one edge over a tile whose corner pixel's value is `e`
-    /// (already less its margin), steps `a` (x) and `b` (y).
-    fn edge_mask(self, e: f32, a: f32, b: f32) -> u32;
+    /// The per-pixel offsets of the three edges, held the way the lanes want them.
+    type Offsets: Copy;
+    /// The offsets `a dx + b dy` (in this order of operations) of pixel `dy * 8 + dx`
+    /// from its tile's corner pixel, per edge of slopes `a[k]`, `b[k]`.
+    fn offsets(self, a: [f32; 3], b: [f32; 3]) -> Self::Offsets;
+    /// The pixels of a tile inside all three edges whose values at the tile's corner
+    /// pixel are `e`: bit `dy * 8 + dx` when every `e[k] + off[k][dy * 8 + dx] > 0`.
+    fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32;
 }
 
 /// The portable lanes.
@@ -188,99 +332,158 @@ trait Lanes: Copy {
 struct Portable;
 
 impl Lanes for Portable {
+    type Offsets = [[f32; TW * TH]; 3];
     #[inline(always)]
-    fn edge_mask(self, e: f32, a: f32, b: f32) -> u32 {
-        edge_mask(e, a, b)
+    fn offsets(self, a: [f32; 3], b: [f32; 3]) -> Self::Offsets {
+        let mut o = [[0.0f32; TW * TH]; 3];
+        for k in 0..3 {
+            for p in 0..TW * TH {
+                o[k][p] = a[k] * DX[p] + b[k] * DY[p];
+            }
+        }
+        o
+    }
+    #[inline(always)]
+    fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32 {
+        let mut m = 0u32;
+        for p in 0..TW * TH {
+            let inside =
+                (e[0] + off[0][p] > 0.0) & (e[1] + off[1][p] > 0.0) & (e[2] + off[2][p] > 0.0);
+            m |= u32::from(inside) << p;
+        }
+        m
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 impl Lanes for crate::cpu::Avx2 {
+    type Offsets = [[std::arch::x86_64::__m256; 4]; 3];
     #[inline(always)]
-    fn edge_mask(self, e: f32, a: f32, b: f32) -> u32 {
+    fn offsets(self, a: [f32; 3], b: [f32; 3]) -> Self::Offsets {
         use std::arch::x86_64::{
-            _CMP_GT_OQ, _mm256_add_ps, _mm256_cmp_ps, _mm256_movemask_ps, _mm256_mul_ps,
-            _mm256_set1_ps, _mm256_setr_ps, _mm256_setzero_ps,
+            _mm256_add_ps, _mm256_loadu_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps,
         };
-        // SAFETY: a value of `Avx2` exists only on a processor with AVX2
-        // (`cpu::Avx2::new` checks it); these are arithmetic intrinsics on registers.
+        // SAFETY: a value of `Avx2` exists only on a processor with AVX2; each load
+        // reads 8 of the 32 floats of `DX` or `DY`.
         unsafe {
-            let dx = _mm256_setr_ps(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
-            let ax = _mm256_mul_ps(_mm256_set1_ps(a), dx);
+            let mut o = [[_mm256_setzero_ps(); 4]; 3];
+            for k in 0..3 {
+                let (av, bv) = (_mm256_set1_ps(a[k]), _mm256_set1_ps(b[k]));
+                for q in 0..4 {
+                    let dx = _mm256_loadu_ps(DX[q * 8..].as_ptr());
+                    let dy = _mm256_loadu_ps(DY[q * 8..].as_ptr());
+                    o[k][q] = _mm256_add_ps(_mm256_mul_ps(av, dx), _mm256_mul_ps(bv, dy));
+                }
+            }
+            o
+        }
+    }
+    #[inline(always)]
+    fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32 {
+        use std::arch::x86_64::{
+            _CMP_GT_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_cmp_ps, _mm256_movemask_ps,
+            _mm256_set1_ps, _mm256_setzero_ps,
+        };
+        // SAFETY: a value of `Avx2` exists only on a processor with AVX2; these are
+        // arithmetic intrinsics on registers.
+        unsafe {
             let zero = _mm256_setzero_ps();
+            let ev = [
+                _mm256_set1_ps(e[0]),
+                _mm256_set1_ps(e[1]),
+                _mm256_set1_ps(e[2]),
+            ];
             let mut m = 0u32;
-            for dy in 0..TH {
-                let row = e + b * dy as f32;
-                let lanes = _mm256_add_ps(_mm256_set1_ps(row), ax);
-                let bits = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(lanes, zero)) as u32;
-                m |= bits << (dy * TW);
+            for q in 0..4 {
+                let c0 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[0], off[0][q]), zero);
+                let c1 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[1], off[1][q]), zero);
+                let c2 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[2], off[2][q]), zero);
+                let c = _mm256_and_ps(_mm256_and_ps(c0, c1), c2);
+                m |= (_mm256_movemask_ps(c) as u32) << (q * 8);
             }
             m
         }
     }
 }
 
-/// The coverage of one edge over a tile (see [`Lanes::edge_mask`]), portable.
-#[inline(always)]
-fn edge_mask(e: f32, a: f32, b: f32) -> u32 {
-    let mut m = 0u32;
-    for dy in 0..TH {
-        let row = e + b * dy as f32;
-        let mut lanes = [0.0f32; TW];
-        for (dx, l) in lanes.iter_mut().enumerate() {
-            *l = row + a * dx as f32;
+#[cfg(target_arch = "x86_64")]
+impl Lanes for crate::cpu::Avx512 {
+    type Offsets = [[std::arch::x86_64::__m512; 2]; 3];
+    #[inline(always)]
+    fn offsets(self, a: [f32; 3], b: [f32; 3]) -> Self::Offsets {
+        use std::arch::x86_64::{
+            _mm512_add_ps, _mm512_loadu_ps, _mm512_mul_ps, _mm512_set1_ps, _mm512_setzero_ps,
+        };
+        // SAFETY: a value of `Avx512` exists only on a processor with AVX-512 F; each
+        // load reads 16 of the 32 floats of `DX` or `DY`.
+        unsafe {
+            let mut o = [[_mm512_setzero_ps(); 2]; 3];
+            for k in 0..3 {
+                let (av, bv) = (_mm512_set1_ps(a[k]), _mm512_set1_ps(b[k]));
+                for q in 0..2 {
+                    let dx = _mm512_loadu_ps(DX[q * 16..].as_ptr());
+                    let dy = _mm512_loadu_ps(DY[q * 16..].as_ptr());
+                    o[k][q] = _mm512_add_ps(_mm512_mul_ps(av, dx), _mm512_mul_ps(bv, dy));
+                }
+            }
+            o
         }
-        let mut bits = 0u32;
-        for (dx, l) in lanes.iter().enumerate() {
-            bits |= u32::from(*l > 0.0) << dx;
-        }
-        m |= bits << (dy * TW);
     }
-    m
+    #[inline(always)]
+    fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32 {
+        use std::arch::x86_64::{
+            _CMP_GT_OQ, _mm512_add_ps, _mm512_cmp_ps_mask, _mm512_mask_cmp_ps_mask, _mm512_set1_ps,
+            _mm512_setzero_ps,
+        };
+        // SAFETY: a value of `Avx512` exists only on a processor with AVX-512 F;
+        // these are arithmetic intrinsics on registers.
+        unsafe {
+            let zero = _mm512_setzero_ps();
+            let ev = [
+                _mm512_set1_ps(e[0]),
+                _mm512_set1_ps(e[1]),
+                _mm512_set1_ps(e[2]),
+            ];
+            let mut half = [0u32; 2];
+            for (q, h) in half.iter_mut().enumerate() {
+                let k = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(_mm512_add_ps(ev[0], off[0][q]), zero);
+                let k =
+                    _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(k, _mm512_add_ps(ev[1], off[1][q]), zero);
+                let k =
+                    _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(k, _mm512_add_ps(ev[2], off[2][q]), zero);
+                *h = u32::from(k);
+            }
+            half[0] | half[1] << 16
+        }
+    }
 }
-
-/// The relative bound on the rounding of an edge value evaluated in `f32` over a tile
-/// (conversion of the corner value and of the steps, two additions).
-const EDGE_ROUNDING: f64 = 1.0 / (1u64 << 18) as f64;
 
 /// Rasterizes one set-up triangle.
 #[inline(always)]
-fn draw_setup<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, s: &Setup) {
-    let (tx0, tx1) = (s.x0 as usize / TW, s.x1 as usize / TW);
-    let (ty0, ty1) = (s.y0 as usize / TH, s.y1 as usize / TH);
-    let af = s.a.map(|a| a as f32);
-    let bf = s.b.map(|b| b as f32);
-    let span =
-        [0, 1, 2].map(|k| (TW as f64 - 1.0) * s.a[k].abs() + (TH as f64 - 1.0) * s.b[k].abs());
-    let wx = TW as f64 - 1.0 + buf.r;
-    let wy = TH as f64 - 1.0 + buf.r;
-    for ty in ty0..=ty1 {
-        let y = (ty * TH) as f64;
-        for tx in tx0..=tx1 {
-            let x = (tx * TW) as f64;
-            let mut mask = FULL;
-            let mut empty = false;
-            for k in 0..3 {
-                let e = s.a[k] * x + s.b[k] * y + s.c[k];
-                let e = e - (e.abs() + span[k]) * EDGE_ROUNDING;
-                let lo =
-                    e + s.a[k].min(0.0) * (TW as f64 - 1.0) + s.b[k].min(0.0) * (TH as f64 - 1.0);
-                if lo - span[k] * EDGE_ROUNDING > 0.0 {
-                    continue;
-                }
-                let hi =
-                    e + s.a[k].max(0.0) * (TW as f64 - 1.0) + s.b[k].max(0.0) * (TH as f64 - 1.0);
-                if !(hi > 0.0) {
-                    empty = true;
-                    break;
-                }
-                mask &= lanes.edge_mask(f32_down(e), af[k], bf[k]);
-            }
-            if empty || mask == 0 {
+fn draw_setup<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, s: &TileSetup) {
+    let off = lanes.offsets(s.a, s.b);
+    for ty in s.ty0..=s.ty1 {
+        let j = (ty - s.ty0) as f32;
+        let row = [
+            s.e[0] + s.ey[0] * j,
+            s.e[1] + s.ey[1] * j,
+            s.e[2] + s.ey[2] * j,
+        ];
+        let zrow = s.z + s.zy * j;
+        let base = ty * buf.tiles_x;
+        for tx in s.tx0..=s.tx1 {
+            let i = (tx - s.tx0) as f32;
+            let e = [
+                row[0] + s.ex[0] * i,
+                row[1] + s.ex[1] * i,
+                row[2] + s.ex[2] * i,
+            ];
+            let mask = lanes.mask(&off, e);
+            if mask == 0 {
                 continue;
             }
-            let zt = f32_down(s.far_key(x, y, wx, wy));
-            buf.merge(ty * buf.tiles_x + tx, mask, zt);
+            let zt = (zrow + s.zx * i).max(s.zmin);
+            buf.merge(base + tx, mask, zt);
         }
     }
 }
@@ -289,7 +492,7 @@ fn draw_setup<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, s: &Setup) {
 fn draw_impl<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, tris: &[Tri]) {
     let (w, h, r) = (buf.width, buf.height, buf.r);
     for t in tris {
-        if let Some(s) = setup(t, r, w, h) {
+        if let Some(s) = setup(t, r, w, h).and_then(|s| tile_setup(&s, r)) {
             draw_setup(lanes, buf, &s);
         }
     }
@@ -298,6 +501,12 @@ fn draw_impl<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, tris: &[Tri]) {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn draw_avx2(cpu: crate::cpu::Avx2, buf: &mut MaskedBuffer, tris: &[Tri]) {
+    draw_impl(cpu, buf, tris);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
+fn draw_avx512(cpu: crate::cpu::Avx512, buf: &mut MaskedBuffer, tris: &[Tri]) {
     draw_impl(cpu, buf, tris);
 }
 

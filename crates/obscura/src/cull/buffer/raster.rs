@@ -26,6 +26,9 @@ pub(crate) struct Setup {
     pub a: [f64; 3],
     pub b: [f64; 3],
     pub c: [f64; 3],
+    /// Per edge, the magnitudes its constant was computed from (`|a X| + |b Y|` at the
+    /// edge's first vertex, and the shift): its rounding is below `2^-52` of them.
+    pub cmag: [f64; 3],
     /// Depth-key plane `p X + q Y + r`.
     pub p: f64,
     pub q: f64,
@@ -83,12 +86,13 @@ pub(crate) fn setup(v: &Tri, r: f64, w: u32, h: u32) -> Option<Setup> {
     if !(x0 <= x1 && y0 <= y1) {
         return None;
     }
-    let (mut a, mut b, mut c) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+    let (mut a, mut b, mut c, mut cmag) = ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
     for k in 0..3 {
         let (p, q) = (v[k], v[(k + 1) % 3]);
         a[k] = -(q[1] - p[1]);
         b[k] = q[0] - p[0];
         c[k] = -(a[k] * p[0] + b[k] * p[1]) + a[k].min(0.0) * r + b[k].min(0.0) * r;
+        cmag[k] = (a[k] * p[0]).abs() + (b[k] * p[1]).abs() + (a[k].abs() + b[k].abs()) * r;
     }
     let (dx1, dy1, dz1) = (v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]);
     let (dx2, dy2, dz2) = (v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]);
@@ -104,6 +108,7 @@ pub(crate) fn setup(v: &Tri, r: f64, w: u32, h: u32) -> Option<Setup> {
         a,
         b,
         c,
+        cmag,
         p,
         q,
         r: rr,
