@@ -11,6 +11,14 @@
 //! inside the triangle, with a margin for rounding) and depths round towards
 //! farther, so the buffer never claims an occluder where the z-buffer would not draw
 //! one: the test built on it is conservative.
+//!
+//! The raster: a triangle is set up once ([`tile_setup`]: its three edge functions and
+//! depth plane in `f32`, with the margins that cover every rounding of the tile loop
+//! folded into their constants, proved there); a tile then costs its three edge values
+//! (`e + ex i + ey j`), one evaluation of its 32 pixels per edge (`e + a dx + b dy >
+//! 0`: 2 AVX-512 or 4 AVX2 vectors) and its depth bound; the AVX-512 kernel merges the
+//! tiles of a row (up to 16) in vector lanes. Every kernel runs the same `f32`
+//! operations, so they leave the same bits.
 
 use super::raster::{Setup, Tri, f32_down, setup};
 use crate::cpu::Kernel;
@@ -30,34 +38,13 @@ pub struct MaskedBuffer {
     tiles_x: usize,
     tiles_y: usize,
     r: f64,
-    /// The tiles, row by row.
-    tiles: Vec<Tile>,
-}
-
-/// One tile's state, together in 16 bytes: a triangle's merge touches one cache line
-/// per tile (the buffer of a 1920x1080 view is a megabyte, larger than a core's L2).
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
-struct Tile {
-    /// The working layer's coverage.
-    mask: u32,
-    /// The bits of pixels outside the buffer (right and bottom borders).
-    pad: u32,
-    /// The reference key (every pixel).
-    z0: f32,
-    /// The working layer's key.
-    z1: f32,
-}
-
-impl Default for Tile {
-    fn default() -> Self {
-        Tile {
-            mask: 0,
-            pad: 0,
-            z0: f32::NEG_INFINITY,
-            z1: f32::NEG_INFINITY,
-        }
-    }
+    /// Per tile, row by row (each in its own array, so a row of tiles is a vector):
+    /// the working layer's coverage, the bits of pixels outside the buffer (right and
+    /// bottom borders), the reference key (every pixel) and the working layer's key.
+    mask: Vec<u32>,
+    pad: Vec<u32>,
+    z0: Vec<f32>,
+    z1: Vec<f32>,
 }
 
 impl MaskedBuffer {
@@ -70,8 +57,14 @@ impl MaskedBuffer {
         self.tiles_x = (width as usize).div_ceil(TW);
         self.tiles_y = (height as usize).div_ceil(TH);
         let n = self.tiles_x * self.tiles_y;
-        self.tiles.clear();
-        self.tiles.resize(n, Tile::default());
+        self.mask.clear();
+        self.mask.resize(n, 0);
+        self.z0.clear();
+        self.z0.resize(n, f32::NEG_INFINITY);
+        self.z1.clear();
+        self.z1.resize(n, f32::NEG_INFINITY);
+        self.pad.clear();
+        self.pad.resize(n, 0);
         // Only the last column and row of tiles hold pixels outside the buffer.
         let border = |t: usize, tiles: usize| t + 1 == tiles;
         for ty in 0..self.tiles_y {
@@ -87,7 +80,7 @@ impl MaskedBuffer {
                         }
                     }
                 }
-                self.tiles[ty * self.tiles_x + tx].pad = m;
+                self.pad[ty * self.tiles_x + tx] = m;
             }
         }
     }
@@ -125,11 +118,10 @@ impl MaskedBuffer {
         let (x, y) = (x as usize, y as usize);
         let t = (y / TH) * self.tiles_x + x / TW;
         let bit = 1u32 << ((y % TH) * TW + x % TW);
-        let t = &self.tiles[t];
-        if t.mask & bit != 0 {
-            t.z0.max(t.z1)
+        if self.mask[t] & bit != 0 {
+            self.z0[t].max(self.z1[t])
         } else {
-            t.z0
+            self.z0[t]
         }
     }
 
@@ -144,8 +136,8 @@ impl MaskedBuffer {
             let rows: u32 = (ra..=rb).fold(0, |m, dy| m | 0xff << (dy * TW));
             let row = ty * self.tiles_x;
             for tx in x0 / TW..=x1 / TW {
-                let tile = &self.tiles[row + tx];
-                let z0 = tile.z0;
+                let t = row + tx;
+                let z0 = self.z0[t];
                 if key < z0 {
                     continue;
                 }
@@ -154,7 +146,7 @@ impl MaskedBuffer {
                 let cols = (0xffu32 >> (TW - 1 - (cb - ca))) << ca;
                 let cols4 = cols * 0x0101_0101;
                 let want = rows & cols4;
-                if key < tile.z1 && want & !tile.mask == 0 {
+                if key < self.z1[t] && want & !self.mask[t] == 0 {
                     continue;
                 }
                 return false;
@@ -175,8 +167,7 @@ impl MaskedBuffer {
     ///   `z1` does; a working layer that then fills the tile becomes the reference.
     #[inline(always)]
     fn merge(&mut self, t: usize, m: u32, zt: f32) {
-        let tile = &mut self.tiles[t];
-        let (z0, mask, z1, pad) = (tile.z0, tile.mask, tile.z1, tile.pad);
+        let (z0, mask, z1, pad) = (self.z0[t], self.mask[t], self.z1[t], self.pad[t]);
         let skip = (m == 0) | !(zt > z0);
         let full = m | pad == FULL;
         // The triangle fills the tile.
@@ -189,7 +180,7 @@ impl MaskedBuffer {
         // It joins or replaces the working layer.
         let replace = (mask == 0) | (z1 - zt > zt - z0);
         let pm = if replace { m } else { mask | m };
-        let pz1 = if replace { zt } else { z1.min(zt) };
+        let pz1 = if replace { zt } else { min(z1, zt) };
         let promote = pm | pad == FULL;
         let (qz0, qmask, qz1) = if promote {
             (pz1, 0, f32::NEG_INFINITY)
@@ -206,9 +197,9 @@ impl MaskedBuffer {
         } else {
             (nz0, nmask, nz1)
         };
-        tile.z0 = nz0;
-        tile.mask = nmask;
-        tile.z1 = nz1;
+        self.z0[t] = nz0;
+        self.mask[t] = nmask;
+        self.z1[t] = nz1;
     }
 }
 
@@ -358,7 +349,50 @@ trait Lanes: Copy {
     /// The pixels of a tile inside all three edges whose values at the tile's corner
     /// pixel are `e`: bit `dy * 8 + dx` when every `e[k] + off[k][dy * 8 + dx] > 0`.
     fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32;
+
+    /// Draws `count` tiles `t + l` of one row: tile `l`'s edge values `e[k] + ex[k]
+    /// (i0 + l)`, its depth bound `max(zrow + zx (i0 + l), zmin)` with `[zrow, zx, i0,
+    /// zmin] = z` (`i0 + l`, the tile's index in the triangle's row, exact in `f32`).
+    /// This default merges tile by tile ([`MaskedBuffer::merge`]).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn row(
+        self,
+        buf: &mut MaskedBuffer,
+        off: &Self::Offsets,
+        t: usize,
+        count: usize,
+        e: [f32; 3],
+        ex: [f32; 3],
+        z: [f32; 4],
+    ) {
+        let [zrow, zx, i0, zmin] = z;
+        let mut i = i0;
+        for l in 0..count {
+            let m = self.mask(off, [e[0] + ex[0] * i, e[1] + ex[1] * i, e[2] + ex[2] * i]);
+            let zt = max(zrow + zx * i, zmin);
+            buf.merge(t + l, m, zt);
+            i += 1.0;
+        }
+    }
 }
+
+/// `a > b ? a : b`, the vector instructions' maximum (which picks `b` for equal
+/// zeros of either sign, or a NaN, where `f32::max` may pick either): every kernel
+/// takes these, so they agree to the bit.
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// `a < b ? a : b`, the vector instructions' minimum (see [`max`]).
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// The tiles of a row merged at once (the lanes of an AVX-512 vector).
+const ROW: usize = 16;
 
 /// The portable lanes.
 #[derive(Clone, Copy)]
@@ -489,7 +523,115 @@ impl Lanes for crate::cpu::Avx512 {
             half[0] | half[1] << 16
         }
     }
+
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn row(
+        self,
+        buf: &mut MaskedBuffer,
+        off: &Self::Offsets,
+        t: usize,
+        count: usize,
+        e: [f32; 3],
+        ex: [f32; 3],
+        z: [f32; 4],
+    ) {
+        use std::arch::x86_64::{_mm512_mask_set1_epi32, _mm512_setzero_si512 as zeros};
+        let [_, _, i0, _] = z;
+        // The masks gathered in a register (built in memory, a vector load would wait
+        // for the scalar stores to retire).
+        // SAFETY: a value of `Avx512` exists only on a processor with AVX-512 F; these
+        // are register intrinsics.
+        let mut m = unsafe { zeros() };
+        let mut i = i0;
+        for l in 0..count {
+            let bits = self.mask(off, [e[0] + ex[0] * i, e[1] + ex[1] * i, e[2] + ex[2] * i]);
+            // SAFETY: as above.
+            m = unsafe { _mm512_mask_set1_epi32(m, 1 << l, bits as i32) };
+            i += 1.0;
+        }
+        self.merge_row(buf, t, count, m, z);
+    }
 }
+
+#[cfg(target_arch = "x86_64")]
+impl crate::cpu::Avx512 {
+    /// Merges the coverage `m` (lane `l`) of tiles `t + l`, `l < count`, of one row
+    /// (see [`Lanes::row`]): [`MaskedBuffer::merge`] in lanes.
+    #[inline(always)]
+    fn merge_row(
+        self,
+        buf: &mut MaskedBuffer,
+        t: usize,
+        count: usize,
+        m: std::arch::x86_64::__m512i,
+        z: [f32; 4],
+    ) {
+        use std::arch::x86_64::{
+            _CMP_GT_OQ, _MM_CMPINT_EQ, _MM_CMPINT_NE, _mm512_add_ps, _mm512_cmp_epi32_mask,
+            _mm512_cmp_ps_mask, _mm512_loadu_ps, _mm512_mask_blend_epi32, _mm512_mask_blend_ps,
+            _mm512_mask_cmp_ps_mask, _mm512_mask_storeu_epi32, _mm512_mask_storeu_ps,
+            _mm512_maskz_loadu_epi32, _mm512_maskz_loadu_ps, _mm512_max_ps, _mm512_min_ps,
+            _mm512_mul_ps, _mm512_or_si512, _mm512_set1_epi32, _mm512_set1_ps,
+            _mm512_setzero_si512, _mm512_sub_ps,
+        };
+        let [zrow, zx, i0, zmin] = z;
+        let n = count;
+        assert!(n <= ROW && t + n <= buf.z0.len());
+        let k = ((1u32 << n) - 1) as u16;
+        // SAFETY: a value of `Avx512` exists only on a processor with AVX-512 F; the
+        // loads and stores touch lanes `0 .. n` only (mask `k`), tiles `t .. t + n`,
+        // inside the arrays (asserted).
+        unsafe {
+            let lanes = _mm512_add_ps(_mm512_set1_ps(i0), _mm512_loadu_ps(LANE.as_ptr()));
+            let zt = _mm512_max_ps(
+                _mm512_add_ps(
+                    _mm512_set1_ps(zrow),
+                    _mm512_mul_ps(_mm512_set1_ps(zx), lanes),
+                ),
+                _mm512_set1_ps(zmin),
+            );
+            let z0 = _mm512_maskz_loadu_ps(k, buf.z0.as_ptr().add(t));
+            let z1 = _mm512_maskz_loadu_ps(k, buf.z1.as_ptr().add(t));
+            let mask = _mm512_maskz_loadu_epi32(k, buf.mask.as_ptr().add(t).cast());
+            let pad = _mm512_maskz_loadu_epi32(k, buf.pad.as_ptr().add(t).cast());
+            let zero = _mm512_setzero_si512();
+            let ones = _mm512_set1_epi32(-1);
+            let ninf = _mm512_set1_ps(f32::NEG_INFINITY);
+            // The tiles to change: some coverage and nearer than z0.
+            let go = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(
+                _mm512_cmp_epi32_mask::<_MM_CMPINT_NE>(m, zero) & k,
+                zt,
+                z0,
+            );
+            let full = _mm512_cmp_epi32_mask::<_MM_CMPINT_EQ>(_mm512_or_si512(m, pad), ones);
+            let keep = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(z1, zt);
+            let replace = _mm512_cmp_epi32_mask::<_MM_CMPINT_EQ>(mask, zero)
+                | _mm512_cmp_ps_mask::<_CMP_GT_OQ>(_mm512_sub_ps(z1, zt), _mm512_sub_ps(zt, z0));
+            let pm = _mm512_mask_blend_epi32(replace, _mm512_or_si512(mask, m), m);
+            let pz1 = _mm512_mask_blend_ps(replace, _mm512_min_ps(z1, zt), zt);
+            let promote = _mm512_cmp_epi32_mask::<_MM_CMPINT_EQ>(_mm512_or_si512(pm, pad), ones);
+            // Not full: join/replace, then promote.
+            let nz0 = _mm512_mask_blend_ps(promote, z0, pz1);
+            let nmask = _mm512_mask_blend_epi32(promote, pm, zero);
+            let nz1 = _mm512_mask_blend_ps(promote, pz1, ninf);
+            // Full: z0 = zt, the working layer kept only when nearer.
+            let nz0 = _mm512_mask_blend_ps(full, nz0, zt);
+            let nmask =
+                _mm512_mask_blend_epi32(full, nmask, _mm512_mask_blend_epi32(keep, zero, mask));
+            let nz1 = _mm512_mask_blend_ps(full, nz1, _mm512_mask_blend_ps(keep, ninf, z1));
+            _mm512_mask_storeu_ps(buf.z0.as_mut_ptr().add(t), go, nz0);
+            _mm512_mask_storeu_ps(buf.z1.as_mut_ptr().add(t), go, nz1);
+            _mm512_mask_storeu_epi32(buf.mask.as_mut_ptr().add(t).cast(), go, nmask);
+        }
+    }
+}
+
+/// The lane numbers `0 .. 16` as `f32`.
+#[cfg(target_arch = "x86_64")]
+const LANE: [f32; ROW] = [
+    0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0,
+];
 
 /// Rasterizes one set-up triangle.
 #[inline(always)]
@@ -503,27 +645,72 @@ fn draw_setup<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, s: &TileSetup) {
             s.e[2] + s.ey[2] * j,
         ];
         let zrow = s.z + s.zy * j;
-        let base = ty * buf.tiles_x;
-        let mut i = 0.0f32;
-        for tx in s.tx0..=s.tx1 {
-            let e = [
-                row[0] + s.ex[0] * i,
-                row[1] + s.ex[1] * i,
-                row[2] + s.ex[2] * i,
-            ];
-            let mask = lanes.mask(&off, e);
-            let zt = (zrow + s.zx * i).max(s.zmin);
-            buf.merge(base + tx, mask, zt);
-            i += 1.0;
+        let base = ty * buf.tiles_x + s.tx0;
+        let n = s.tx1 - s.tx0 + 1;
+        // The row in runs of up to `ROW` tiles: their masks, then one merge.
+        let mut first = 0;
+        while first < n {
+            let count = (n - first).min(ROW);
+            lanes.row(
+                buf,
+                &off,
+                base + first,
+                count,
+                row,
+                s.ex,
+                [zrow, s.zx, first as f32, s.zmin],
+            );
+            first += count;
         }
         j += 1.0;
+    }
+}
+
+/// How many triangles ahead the tiles are asked for (the buffer of a large view does
+/// not stay in the core's caches while the triangles stream through).
+const PREFETCH: usize = 4;
+
+impl MaskedBuffer {
+    /// Asks the caches for the first tiles of each of the (up to 4) first tile rows a
+    /// triangle's box reaches; only a hint, nothing is read.
+    #[inline(always)]
+    fn prefetch(&self, t: &Tri) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            let x = t[0][0].min(t[1][0]).min(t[2][0]);
+            let y = t[0][1].min(t[1][1]).min(t[2][1]);
+            let y1 = t[0][1].max(t[1][1]).max(t[2][1]);
+            // Saturating casts: NaN and negative values give 0.
+            let tx = (x.max(0.0) as usize / TW).min(self.tiles_x.saturating_sub(1));
+            let ty0 = (y.max(0.0) as usize / TH).min(self.tiles_y.saturating_sub(1));
+            let ty1 = (y1.max(0.0) as usize / TH).min(self.tiles_y.saturating_sub(1));
+            for ty in ty0..=ty1.min(ty0 + 3) {
+                let i = ty * self.tiles_x + tx;
+                if i < self.z0.len() {
+                    // SAFETY: `_mm_prefetch` (SSE, in every x86-64) only hints; the
+                    // addresses are inside the arrays.
+                    unsafe {
+                        _mm_prefetch::<_MM_HINT_T0>(self.z0.as_ptr().add(i).cast());
+                        _mm_prefetch::<_MM_HINT_T0>(self.z1.as_ptr().add(i).cast());
+                        _mm_prefetch::<_MM_HINT_T0>(self.mask.as_ptr().add(i).cast());
+                        _mm_prefetch::<_MM_HINT_T0>(self.pad.as_ptr().add(i).cast());
+                    }
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = t;
     }
 }
 
 #[inline(always)]
 fn draw_impl<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, tris: &[Tri]) {
     let (w, h, r) = (buf.width, buf.height, buf.r);
-    for t in tris {
+    for (n, t) in tris.iter().enumerate() {
+        if let Some(next) = tris.get(n + PREFETCH) {
+            buf.prefetch(next);
+        }
         if let Some(s) = setup(t, r, w, h).and_then(|s| tile_setup(&s, r)) {
             draw_setup(lanes, buf, &s);
         }
@@ -552,10 +739,6 @@ pub(crate) fn draw_portable(buf: &mut MaskedBuffer, tris: &[Tri]) {
 impl MaskedBuffer {
     /// The raw state, for comparisons of kernels.
     pub(crate) fn state(&self) -> (Vec<u32>, Vec<f32>, Vec<f32>) {
-        (
-            self.tiles.iter().map(|t| t.mask).collect(),
-            self.tiles.iter().map(|t| t.z0).collect(),
-            self.tiles.iter().map(|t| t.z1).collect(),
-        )
+        (self.mask.clone(), self.z0.clone(), self.z1.clone())
     }
 }
