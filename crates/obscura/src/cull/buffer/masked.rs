@@ -413,9 +413,8 @@ impl Lanes for Portable {
     #[inline(always)]
     fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32 {
         let mut m = 0u32;
-        for p in 0..TW * TH {
-            let inside =
-                (e[0] + off[0][p] > 0.0) & (e[1] + off[1][p] > 0.0) & (e[2] + off[2][p] > 0.0);
+        for (p, ((o0, o1), o2)) in off[0].iter().zip(&off[1]).zip(&off[2]).enumerate() {
+            let inside = (e[0] + o0 > 0.0) & (e[1] + o1 > 0.0) & (e[2] + o2 > 0.0);
             m |= u32::from(inside) << p;
         }
         m
@@ -461,10 +460,10 @@ impl Lanes for crate::cpu::Avx2 {
                 _mm256_set1_ps(e[2]),
             ];
             let mut m = 0u32;
-            for q in 0..4 {
-                let c0 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[0], off[0][q]), zero);
-                let c1 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[1], off[1][q]), zero);
-                let c2 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[2], off[2][q]), zero);
+            for (q, ((&o0, &o1), &o2)) in off[0].iter().zip(&off[1]).zip(&off[2]).enumerate() {
+                let c0 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[0], o0), zero);
+                let c1 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[1], o1), zero);
+                let c2 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[2], o2), zero);
                 let c = _mm256_and_ps(_mm256_and_ps(c0, c1), c2);
                 m |= (_mm256_movemask_ps(c) as u32) << (q * 8);
             }
@@ -666,51 +665,10 @@ fn draw_setup<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, s: &TileSetup) {
     }
 }
 
-/// How many triangles ahead the tiles are asked for (the buffer of a large view does
-/// not stay in the core's caches while the triangles stream through).
-const PREFETCH: usize = 4;
-
-impl MaskedBuffer {
-    /// Asks the caches for the first tiles of each of the (up to 4) first tile rows a
-    /// triangle's box reaches; only a hint, nothing is read.
-    #[inline(always)]
-    fn prefetch(&self, t: &Tri) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-            let x = t[0][0].min(t[1][0]).min(t[2][0]);
-            let y = t[0][1].min(t[1][1]).min(t[2][1]);
-            let y1 = t[0][1].max(t[1][1]).max(t[2][1]);
-            // Saturating casts: NaN and negative values give 0.
-            let tx = (x.max(0.0) as usize / TW).min(self.tiles_x.saturating_sub(1));
-            let ty0 = (y.max(0.0) as usize / TH).min(self.tiles_y.saturating_sub(1));
-            let ty1 = (y1.max(0.0) as usize / TH).min(self.tiles_y.saturating_sub(1));
-            for ty in ty0..=ty1.min(ty0 + 3) {
-                let i = ty * self.tiles_x + tx;
-                if i < self.z0.len() {
-                    // SAFETY: `_mm_prefetch` (SSE, in every x86-64) only hints; the
-                    // addresses are inside the arrays.
-                    unsafe {
-                        _mm_prefetch::<_MM_HINT_T0>(self.z0.as_ptr().add(i).cast());
-                        _mm_prefetch::<_MM_HINT_T0>(self.z1.as_ptr().add(i).cast());
-                        _mm_prefetch::<_MM_HINT_T0>(self.mask.as_ptr().add(i).cast());
-                        _mm_prefetch::<_MM_HINT_T0>(self.pad.as_ptr().add(i).cast());
-                    }
-                }
-            }
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = t;
-    }
-}
-
 #[inline(always)]
 fn draw_impl<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, tris: &[Tri]) {
     let (w, h, r) = (buf.width, buf.height, buf.r);
-    for (n, t) in tris.iter().enumerate() {
-        if let Some(next) = tris.get(n + PREFETCH) {
-            buf.prefetch(next);
-        }
+    for t in tris {
         if let Some(s) = setup(t, r, w, h).and_then(|s| tile_setup(&s, r)) {
             draw_setup(lanes, buf, &s);
         }
