@@ -12,7 +12,7 @@
 //! farther, so the buffer never claims an occluder where the z-buffer would not draw
 //! one: the test built on it is conservative.
 //!
-//! The raster: a triangle is set up once ([`tile_setup`]: its three edge functions and
+//! The raster: a triangle is set up once (`tile_setup`: its three edge functions and
 //! depth plane in `f32`, with the margins that cover every rounding of the tile loop
 //! folded into their constants, proved there); a tile then costs its three edge values
 //! (`e + ex i + ey j`), one evaluation of its 32 pixels per edge (`e + a dx + b dy >
