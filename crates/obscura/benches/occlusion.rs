@@ -79,7 +79,18 @@ fn fill_rate(runs: usize) {
         })
         .collect();
     let mut buf = OcclusionBuffer::new();
-    for (name, kernel) in [("portable", Kernel::Portable), ("avx2", Kernel::Avx2)] {
+    for (name, kernel) in [
+        ("portable", Kernel::Portable),
+        ("avx2", Kernel::Avx2),
+        ("avx512", Kernel::Avx512),
+    ] {
+        if std::env::var("FILL_KERNEL").is_ok_and(|k| k != name) {
+            continue;
+        }
+        if !kernel.is_available() {
+            println!("fill rate ({name}): not measured (this processor lacks it)");
+            continue;
+        }
         let (best, median) = time(runs, || {
             buf.reset(BufferKind::Masked, 1, 1920, 1080);
             buf.draw_screen_triangles(&tris, kernel);
@@ -164,6 +175,9 @@ fn main() {
         .and_then(|a| a.parse().ok())
         .unwrap_or(30);
     fill_rate(runs);
+    if std::env::var("FILL_ONLY").is_ok_and(|v| v == "1") {
+        return;
+    }
     match sponza::atrium() {
         Ok((sponza, camera)) => {
             buffer_frame("sponza", &sponza, &camera, runs);

@@ -7,7 +7,7 @@
 use glam::{DMat4, DVec3};
 
 use crate::SceneIndex;
-use crate::cpu::{Avx2, Kernel};
+use crate::cpu::{Avx2, Avx512, Kernel};
 use crate::cull::buffer::masked::{self, MaskedBuffer};
 use crate::cull::buffer::raster::Tri;
 use crate::cull::buffer::{BufferKind, BufferOptions, OcclusionBuffer};
@@ -629,27 +629,41 @@ fn masked_merge_keeps_both_layers_as_bounds() {
 }
 
 #[test]
-fn avx2_and_portable_rasterizers_leave_the_same_bits() {
+fn vector_and_portable_rasterizers_leave_the_same_bits() {
     if !Avx2::is_available() {
         crate::cpu::simd_test_skipped("AVX2", "occlusion buffer rasterizers");
         return;
+    }
+    let mut kernels = vec![Kernel::Avx2];
+    if Avx512::is_available() {
+        kernels.push(Kernel::Avx512);
+    } else {
+        crate::cpu::simd_test_skipped("AVX-512", "masked buffer rasterizer");
     }
     let (w, h) = (203u32, 117u32);
     for seed in 0..4 {
         let tris = random_tris(300, seed, f64::from(w), f64::from(h));
         let r = [0.0, 0.5][seed as usize % 2];
         let mut p = MaskedBuffer::default();
-        let mut v = MaskedBuffer::default();
         p.reset(w, h, r);
-        v.reset(w, h, r);
         masked::draw_portable(&mut p, &tris);
-        v.draw(&tris, Kernel::Avx2);
         let (pm, p0, p1) = p.state();
-        let (vm, v0, v1) = v.state();
-        assert_eq!(pm, vm);
-        assert!(p0.iter().zip(v0).all(|(a, b)| a.to_bits() == b.to_bits()));
-        assert!(p1.iter().zip(v1).all(|(a, b)| a.to_bits() == b.to_bits()));
         assert!(pm.iter().any(|&m| m != 0) || p0.iter().any(|z| z.is_finite()));
+        for &kernel in &kernels {
+            let mut v = MaskedBuffer::default();
+            v.reset(w, h, r);
+            v.draw(&tris, kernel);
+            let (vm, v0, v1) = v.state();
+            assert_eq!(pm, vm, "{kernel:?}");
+            assert!(
+                p0.iter().zip(v0).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{kernel:?}"
+            );
+            assert!(
+                p1.iter().zip(v1).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{kernel:?}"
+            );
+        }
         let mut hp = crate::cull::buffer::hiz::HizBuffer::default();
         let mut hv = crate::cull::buffer::hiz::HizBuffer::default();
         hp.reset(w, h, r);
@@ -663,6 +677,107 @@ fn avx2_and_portable_rasterizers_leave_the_same_bits() {
                 .all(|(a, b)| a.to_bits() == b.to_bits())
         );
     }
+}
+
+/// `bound <= num / den` exactly (`den > 0`), for a finite or `-inf` bound.
+fn exactly_at_most(bound: f32, num: i128, den: i128) -> bool {
+    if bound == f32::NEG_INFINITY || bound <= 0.0 && num >= 0 {
+        return true;
+    }
+    assert!(bound.is_finite() && bound > 2f32.powi(-40), "bound {bound}");
+    // bound = mant * 2^exp exactly.
+    let bits = bound.to_bits();
+    let (e, f) = ((bits >> 23) as i32, i128::from(bits & 0x7f_ffff));
+    let (mant, exp) = (f | 1 << 23, e - 127 - 23);
+    if exp >= 0 {
+        (mant * den) << exp <= num
+    } else {
+        mant * den <= num << -exp
+    }
+}
+
+#[test]
+fn masked_raster_marks_only_pixels_inside_with_keys_never_nearer_exact_arithmetic() {
+    // One triangle at a time into an empty buffer: a pixel with a bound is one the
+    // raster marked covered. Vertices on a grid of 1/256 pixel and keys on one of
+    // 2^-20, so orientations, barycentric weights and keys are exact integers.
+    let (w, h) = (45u32, 29u32);
+    let mut rng = SplitMix64(2024);
+    let (mut covered, mut inside) = (0usize, 0usize);
+    for case in 0..2500 {
+        let r = [0.0, 0.5][case % 2];
+        let steps = r as i128 * 2 + 1; // samples per axis: 1 (r = 0) or 2 (r = 1/2)
+        let size = [0.7, 3.0, 10.0, 10.0, 40.0, 300.0][case % 6];
+        let (cx, cy) = (
+            rng.range(-5.0, f64::from(w) + 5.0),
+            rng.range(-5.0, f64::from(h) + 5.0),
+        );
+        let mut v = [0; 3].map(|_| {
+            [
+                ((cx + rng.range(-size, size)) * 256.0).round(),
+                ((cy + rng.range(-size, size)) * 256.0).round(),
+                (rng.range(0.05, 1.0) * f64::from(1 << 20)).round(),
+            ]
+        });
+        if case % 7 == 3 {
+            // A sliver: the third vertex a hair off the first edge.
+            v[2][0] = ((v[0][0] + v[1][0]) * 0.5).round() + 1.0;
+            v[2][1] = ((v[0][1] + v[1][1]) * 0.5).round();
+        }
+        let tri: Tri = v.map(|[x, y, k]| [x / 256.0, y / 256.0, k / f64::from(1 << 20)]);
+        let vi = v.map(|c| c.map(|x| x as i128));
+        let orient = |a: [i128; 3], b: [i128; 3], p: [i128; 2]| {
+            (b[0] - a[0]) * (p[1] - a[1]) - (p[0] - a[0]) * (b[1] - a[1])
+        };
+        let d = orient(vi[0], vi[1], [vi[2][0], vi[2][1]]);
+        if d == 0 {
+            continue;
+        }
+        let sgn = d.signum();
+        let mut b = MaskedBuffer::default();
+        b.reset(w, h, r);
+        b.draw(&[tri], Kernel::Auto);
+        for y in 0..h {
+            for x in 0..w {
+                let bound = b.bound(x, y);
+                // Every sample (X, Y) = (x + s / 2, y + t / 2), in 1/256 pixel.
+                let mut all_inside = true;
+                for t in 0..steps {
+                    for s in 0..steps {
+                        let p = [i128::from(x) * 256 + s * 128, i128::from(y) * 256 + t * 128];
+                        let wts = [
+                            orient(vi[1], vi[2], p) * sgn,
+                            orient(vi[2], vi[0], p) * sgn,
+                            orient(vi[0], vi[1], p) * sgn,
+                        ];
+                        let strictly = wts.iter().all(|&q| q > 0);
+                        all_inside &= strictly;
+                        if bound == f32::NEG_INFINITY {
+                            continue;
+                        }
+                        assert!(
+                            strictly,
+                            "case {case}: pixel ({x}, {y}) marked, its sample {p:?}/256 is not inside {tri:?}"
+                        );
+                        // The key there: sum of weights * keys / (|d| 2^20).
+                        let num: i128 = (0..3).map(|i| wts[i] * vi[i][2]).sum();
+                        assert!(
+                            exactly_at_most(bound, num, d.abs() << 20),
+                            "case {case}: pixel ({x}, {y}) bound {bound} nearer than the key {} at {p:?}/256 of {tri:?}",
+                            num as f64 / (d.abs() << 20) as f64
+                        );
+                    }
+                }
+                inside += usize::from(all_inside);
+                covered += usize::from(bound != f32::NEG_INFINITY);
+            }
+        }
+    }
+    // The margins lose only slivers along the edges.
+    assert!(
+        covered * 100 >= inside * 97 && inside > 100_000,
+        "{covered} pixels marked of {inside} inside"
+    );
 }
 
 /// Hundreds of street views, both kinds (run by hand: `cargo test --release -p obscura

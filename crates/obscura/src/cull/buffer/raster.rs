@@ -26,6 +26,9 @@ pub(crate) struct Setup {
     pub a: [f64; 3],
     pub b: [f64; 3],
     pub c: [f64; 3],
+    /// Per edge, the magnitudes its constant was computed from (`|a X| + |b Y|` at the
+    /// edge's first vertex, and the shift): its rounding is below `2^-52` of them.
+    pub cmag: [f64; 3],
     /// Depth-key plane `p X + q Y + r`.
     pub p: f64,
     pub q: f64,
@@ -51,18 +54,15 @@ pub(crate) const DEPTH_MARGIN: f64 = 4e-6;
 /// would be ill-conditioned; leaving a triangle out is always conservative.
 #[inline(always)]
 pub(crate) fn setup(v: &Tri, r: f64, w: u32, h: u32) -> Option<Setup> {
-    let mut v = *v;
     if !v.iter().flatten().all(|c| c.is_finite()) {
         return None;
     }
-    let area2 = |v: &Tri| {
-        (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[2][0] - v[0][0]) * (v[1][1] - v[0][1])
-    };
-    let mut a2 = area2(&v);
-    if a2 < 0.0 {
-        v.swap(1, 2);
-        a2 = -a2;
-    }
+    // Twice the signed area; the edge functions of a clockwise triangle are negated
+    // (exactly) instead of two vertices swapped: no branch on the orientation.
+    let signed =
+        (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[2][0] - v[0][0]) * (v[1][1] - v[0][1]);
+    let sign = if signed < 0.0 { -1.0 } else { 1.0 };
+    let a2 = signed * sign;
     let len2 = (0..3)
         .map(|k| {
             let (p, q) = (v[k], v[(k + 1) % 3]);
@@ -83,17 +83,21 @@ pub(crate) fn setup(v: &Tri, r: f64, w: u32, h: u32) -> Option<Setup> {
     if !(x0 <= x1 && y0 <= y1) {
         return None;
     }
-    let (mut a, mut b, mut c) = ([0.0; 3], [0.0; 3], [0.0; 3]);
+    let (mut a, mut b, mut c, mut cmag) = ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
     for k in 0..3 {
         let (p, q) = (v[k], v[(k + 1) % 3]);
-        a[k] = -(q[1] - p[1]);
-        b[k] = q[0] - p[0];
+        a[k] = -(q[1] - p[1]) * sign;
+        b[k] = (q[0] - p[0]) * sign;
         c[k] = -(a[k] * p[0] + b[k] * p[1]) + a[k].min(0.0) * r + b[k].min(0.0) * r;
+        cmag[k] = (a[k] * p[0]).abs() + (b[k] * p[1]).abs() + (a[k].abs() + b[k].abs()) * r;
     }
     let (dx1, dy1, dz1) = (v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]);
     let (dx2, dy2, dz2) = (v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]);
-    let p = (dz1 * dy2 - dz2 * dy1) / a2;
-    let q = (dx1 * dz2 - dx2 * dz1) / a2;
+    // Numerators and denominator both change sign with the orientation. One division
+    // (its reciprocal's rounding adds a relative 2^-52 to p and q, far inside `zslack`).
+    let inv = 1.0 / signed;
+    let p = (dz1 * dy2 - dz2 * dy1) * inv;
+    let q = (dx1 * dz2 - dx2 * dz1) * inv;
     let rr = v[0][2] - p * v[0][0] - q * v[0][1];
     let zmin = v[0][2].min(v[1][2]).min(v[2][2]);
     let zmax = v[0][2].max(v[1][2]).max(v[2][2]);
@@ -104,6 +108,7 @@ pub(crate) fn setup(v: &Tri, r: f64, w: u32, h: u32) -> Option<Setup> {
         a,
         b,
         c,
+        cmag,
         p,
         q,
         r: rr,
@@ -127,15 +132,25 @@ impl Setup {
     }
 }
 
-/// `value` as an `f32` no larger than it.
+/// `value` as an `f32` no larger than it: the largest `f32` at or below it (`-inf` below
+/// every finite one, `f32::MAX` for a finite value above it; NaN stays NaN). Without
+/// branches (one a triangle takes half the time would be mispredicted half the time):
+/// rounded to nearest, then one step down when that went up, the step taken on the
+/// bits (an `f32`'s magnitude is its bits less the sign, so a step towards `-inf` is
+/// `-1` on a positive one and `+1` on a negative one; zero first becomes `-0.0`, whose
+/// step down is the least negative `f32`).
 #[inline(always)]
 pub(crate) fn f32_down(value: f64) -> f32 {
     let f = value as f32;
-    if f64::from(f) > value {
-        f.next_down()
+    let up = u32::from(f64::from(f) > value);
+    let f = if f == 0.0 { -0.0f32 } else { f };
+    let bits = f.to_bits();
+    let step = if bits >> 31 == 1 {
+        up
     } else {
-        f
-    }
+        up.wrapping_neg()
+    };
+    f32::from_bits(bits.wrapping_add(step))
 }
 
 /// `value` as an `f32` no smaller than it.
