@@ -15,6 +15,7 @@ mod hsr_scenes;
 mod occluders;
 mod octree;
 mod portals;
+mod prt_cells;
 mod raycast;
 mod scanline;
 mod warnock;
