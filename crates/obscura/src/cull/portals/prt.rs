@@ -332,6 +332,36 @@ pub fn hull_planes(points: &[DVec3]) -> Option<Vec<Plane>> {
     (planes.len() >= 4).then_some(planes)
 }
 
+/// Gives `scene` the cells and portals of the PRT1 file at `path` ([`read_prt`]), its
+/// objects assigned by [`assign_objects_inside`] (replacing any cells it had), and
+/// returns a line that says what was imported: leaves, portals, leaves without volume
+/// (never holding the viewer), objects in cells.
+///
+/// # Errors
+/// Those of [`read_prt`].
+pub fn attach(scene: &mut Scene, path: impl AsRef<Path>) -> Result<String> {
+    let mut graph = read_prt(path)?;
+    assign_objects_inside(&mut graph, scene);
+    let flat = flat_leaves(&graph).len();
+    let mut held = vec![false; scene.objects().len()];
+    for c in &graph.cells {
+        for &k in &c.objects {
+            held[k as usize] = true;
+        }
+    }
+    let summary = format!(
+        "{} leaves, {} portals; {flat} leaves without volume (their portals one or coplanar: \
+         the viewer is never located in them); {} of {} objects inside a leaf's portal hull \
+         (the others are never portal-culled)",
+        graph.cells.len(),
+        graph.portals.len(),
+        held.iter().filter(|&&h| h).count(),
+        held.len()
+    );
+    scene.set_cells(Some(std::sync::Arc::new(graph)));
+    Ok(summary)
+}
+
 /// Puts each object of `scene` in the cells of an imported graph that must hold it:
 /// an object whose world box lies inside the hull of one cell (within a rounding
 /// tolerance) is in that leaf, and goes in every cell whose hull its box meets; any
