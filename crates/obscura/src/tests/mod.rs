@@ -12,6 +12,7 @@ mod cull;
 mod cull_buffer;
 mod depth_sort;
 mod hsr_scenes;
+mod occluder_meshes;
 mod occluders;
 mod octree;
 mod portals;

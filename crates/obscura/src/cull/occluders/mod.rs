@@ -81,7 +81,7 @@ pub fn select(
         } else {
             coorg_teller_metric(c.area, c.normal, c.centre, t.eye)
         };
-        if !(f > 0.0) {
+        if !(f > 0.0) || !c.usable(t) {
             continue;
         }
         if c.vertices.iter().any(|&v| !(-t.world_to_eye(v).z > near)) {

@@ -153,6 +153,9 @@ struct ObjectSpec {
     matrix: Option<Spanned<Vec<f64>>>,
     // Cells and portals: the cells (by name) that hold the object.
     cells: Option<Spanned<Vec<String>>>,
+    // Occluder mesh: a mesh file, or a box, in the table's coordinates.
+    occluder: Option<Spanned<String>>,
+    occluder_box: Option<Spanned<[[f64; 3]; 2]>>,
 }
 
 /// The primitives and the parameters each accepts.
@@ -263,6 +266,7 @@ impl SceneReader<'_, '_> {
                 table_objects[k].push(i as u32);
             }
         }
+        self.occluders(&file, &table_objects, &mut scene)?;
         self.cells(&file, &table_objects, &mut scene)?;
         let up = match &file.up {
             Some(up) => Some(self.direction(up.get_ref(), &up.span(), "up")?),
@@ -277,6 +281,75 @@ impl SceneReader<'_, '_> {
             scene.set_camera(Some(camera));
         }
         Ok(scene)
+    }
+
+    /// The tables' `occluder` and `occluder_box`: each object's occluder mesh, checked
+    /// ([`Scene::set_occluder`]); an error at the key's line names the object.
+    fn occluders(
+        &mut self,
+        file: &SceneFile,
+        table_objects: &[Vec<u32>],
+        scene: &mut Scene,
+    ) -> Result<()> {
+        for (k, spec) in file.objects.iter().enumerate() {
+            let o = spec.get_ref();
+            let span = match (&o.occluder, &o.occluder_box) {
+                (None, None) => continue,
+                (Some(_), Some(b)) => {
+                    return Err(self.error(
+                        &b.span(),
+                        "give either `occluder` or `occluder_box`, not both",
+                    ));
+                }
+                (Some(m), None) => m.span(),
+                (None, Some(b)) => b.span(),
+            };
+            let [object] = table_objects[k][..] else {
+                return Err(self.error(
+                    &span,
+                    format!(
+                        "an occluder mesh needs a table that places one object (this one \
+                         places {})",
+                        table_objects[k].len()
+                    ),
+                ));
+            };
+            let table = self.transform(o, &spec.span())?;
+            let (mesh, transform) = if let Some(b) = &o.occluder_box {
+                let [min, max] = b.get_ref().map(DVec3::from_array);
+                if !(min.is_finite() && max.is_finite() && min.cmplt(max).all()) {
+                    return Err(self.error(
+                        &span,
+                        "`occluder_box` is [[min x, y, z], [max x, y, z]], finite, max above \
+                         min on every axis",
+                    ));
+                }
+                (Arc::new(demo::box_mesh(min, max)), table)
+            } else {
+                let m = o.occluder.as_ref().expect("matched above");
+                let f = self.mesh_file(m, scene)?;
+                let [fo] = &f.objects[..] else {
+                    return Err(self.error(
+                        &span,
+                        format!(
+                            "\"{}\" holds {} objects: an occluder mesh file holds one",
+                            m.get_ref(),
+                            f.objects.len()
+                        ),
+                    ));
+                };
+                (fo.mesh.clone(), table * fo.transform)
+            };
+            scene
+                .set_occluder(object as usize, &mesh, transform)
+                .map_err(|e| match e {
+                    Error::InvalidObject { object, message } => {
+                        self.error(&span, format!("object \"{object}\": {message}"))
+                    }
+                    e => self.error(&span, e.to_string()),
+                })?;
+        }
+        Ok(())
     }
 
     /// The `[[cell]]` and `[[portal]]` tables: the scene's cells and portals, checked
