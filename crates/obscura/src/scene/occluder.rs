@@ -36,10 +36,10 @@ use crate::{Error, Result};
 /// Directions the parity ray is cast in (irregular, so that grid-aligned meshes are
 /// rarely grazed; the next one is tried when a ray grazes an edge).
 const RAY_DIRECTIONS: [[f64; 3]; 4] = [
-    [0.577_215_66, 0.618_033_98, 0.533_725_96],
-    [-0.301_029_99, 0.887_010_83, -0.350_183_14],
-    [0.141_421_35, -0.523_598_77, 0.840_896_41],
-    [-0.693_147_18, -0.412_310_56, 0.590_863_84],
+    [0.577_2, 0.618_1, 0.533_7],
+    [-0.301_7, 0.887_3, -0.350_9],
+    [0.141_9, -0.523_1, 0.840_3],
+    [-0.693_9, -0.412_7, 0.590_1],
 ];
 
 impl Scene {

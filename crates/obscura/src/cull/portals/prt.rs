@@ -274,11 +274,10 @@ pub fn hull_planes(points: &[DVec3]) -> Option<Vec<Plane>> {
             .normalize_or_zero();
         (n, -n.dot(pts[f[0]]))
     };
-    for i in 0..pts.len() {
+    for (i, &p) in pts.iter().enumerate() {
         if [i0, i1, i2, i3].contains(&i) {
             continue;
         }
-        let p = pts[i];
         let visible: Vec<bool> = faces
             .iter()
             .map(|f| {
