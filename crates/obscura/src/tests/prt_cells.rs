@@ -403,3 +403,65 @@ fn flat_leaves_and_viewers_outside_the_hulls_are_said() {
     assert!(c.notes.is_empty(), "{:?}", c.notes);
     assert_eq!(c.objects[0], None);
 }
+
+#[test]
+#[cfg(feature = "toml-scene")]
+fn scene_files_take_a_prt1_file_for_their_cells() {
+    use crate::Error;
+    let dir = std::env::temp_dir().join(format!("obscura-prt-toml-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let room = "PRT1\n3\n2\n4 0 1 (0 0 0) (0 2 0) (0 2 2) (0 0 2)\n\
+                4 0 2 (4 0 0) (4 2 0) (4 2 2) (4 0 2)\n";
+    std::fs::write(dir.join("room.prt"), room).unwrap();
+    std::fs::write(
+        dir.join("bad.prt"),
+        "PRT1\n2\n1\n3 0 9 (0 0 0) (1 0 0) (0 1 0)\n",
+    )
+    .unwrap();
+    let load = |text: &str| {
+        let file = dir.join("scene.toml");
+        std::fs::write(&file, text).unwrap();
+        Scene::load(&file)
+    };
+    let objects = "[[object]]\nname = \"in\"\nprimitive = \"box\"\nsize = [0.4, 0.4, 0.4]\n\
+                   translate = [2, 1, 1]\n\n[[object]]\nname = \"out\"\nprimitive = \"box\"\n\
+                   translate = [-2, 1, 1]\n";
+    let s = load(&format!("prt = \"room.prt\"\n\n{objects}")).unwrap();
+    let g = s.cells().unwrap();
+    assert!(g.partial_cells);
+    assert_eq!(g.cells.len(), 3);
+    assert_eq!(g.cells[0].objects, vec![0]);
+    assert_eq!(g.locate(DVec3::new(2.0, 1.5, 1.0)), Some(0));
+    // Errors: with [[cell]] tables (at the table's line); a bad PRT1 file (its own
+    // name and line); a missing one.
+    let both = format!(
+        "prt = \"room.prt\"\n{objects}\n[[cell]]\nname = \"a\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n"
+    );
+    match load(&both) {
+        Err(Error::Parse { line, message, .. }) => {
+            assert_eq!(
+                line,
+                both[..both.find("[[cell]]").unwrap()].matches('\n').count() + 1
+            );
+            assert!(message.contains("not both"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+    match load(&format!("prt = \"bad.prt\"\n{objects}")) {
+        Err(Error::Parse {
+            path,
+            line,
+            message,
+        }) => {
+            assert!(path.ends_with("bad.prt"), "{path:?}");
+            assert_eq!(line, 4);
+            assert!(message.contains("out of range"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(
+        load(&format!("prt = \"missing.prt\"\n{objects}")),
+        Err(Error::Io { .. })
+    ));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -76,6 +76,8 @@ struct SceneFile {
     cells: Vec<Spanned<CellSpec>>,
     #[serde(default, rename = "portal")]
     portals: Vec<Spanned<PortalSpec>>,
+    /// A Quake tools' portal file (PRT1) giving the cells instead of the tables.
+    prt: Option<Spanned<String>>,
 }
 
 /// A convex cell: `planes`, or a ground-plane polygon `floor` extruded by `height`
@@ -352,14 +354,80 @@ impl SceneReader<'_, '_> {
         Ok(())
     }
 
+    /// `prt = "file.prt"`: the cells of a PRT1 file, each leaf the hull of its
+    /// portals, the objects inside a hull assigned
+    /// ([`crate::cull::portals::prt::assign_objects_inside`]). Not with `[[cell]]`,
+    /// `[[portal]]` or an object's `cells`.
+    fn prt_cells(
+        &mut self,
+        file: &SceneFile,
+        prt: &Spanned<String>,
+        scene: &mut Scene,
+    ) -> Result<()> {
+        use crate::cull::portals::prt::{assign_objects_inside, parse_prt};
+        if let Some(c) = file.cells.first() {
+            return Err(self.error(&c.span(), "give either `prt` or [[cell]] tables, not both"));
+        }
+        if let Some(p) = file.portals.first() {
+            return Err(self.error(
+                &p.span(),
+                "give either `prt` or [[portal]] tables, not both",
+            ));
+        }
+        if let Some(c) = file.objects.iter().find_map(|o| o.get_ref().cells.as_ref()) {
+            return Err(self.error(
+                &c.span(),
+                "`cells` names [[cell]] tables; with `prt` an object goes in the leaf whose \
+                 portals' hull holds it",
+            ));
+        }
+        let span = prt.span();
+        let reference = format!(
+            "referenced from {}:{}",
+            self.path.display(),
+            self.line(&span)
+        );
+        let full = self
+            .sources
+            .resolve(
+                self.path,
+                &format!("line {}", self.line(&span)),
+                prt.get_ref(),
+                Syntax::Path,
+            )
+            .map_err(|e| match e {
+                Error::Format { message, .. } => self.error(&span, message),
+                e @ Error::Io { .. } => with_reference(e, &reference),
+                e => e,
+            })?;
+        let bytes = self
+            .sources
+            .read(&full)
+            .map_err(|e| with_reference(e, &reference))?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| self.error(&span, format!("\"{}\" is not UTF-8 text", prt.get_ref())))?;
+        let mut graph = parse_prt(&text, &full).map_err(|e| with_reference(e, &reference))?;
+        assign_objects_inside(&mut graph, scene);
+        scene.set_cells(Some(Arc::new(graph)));
+        Ok(())
+    }
+
     /// The `[[cell]]` and `[[portal]]` tables: the scene's cells and portals, checked
     /// ([`CellGraph::validate`](crate::cull::portals::CellGraph::validate)); objects
     /// go in the cells their table names, or, without `cells`, in every cell their
     /// bounds meet.
-    fn cells(&self, file: &SceneFile, table_objects: &[Vec<u32>], scene: &mut Scene) -> Result<()> {
+    fn cells(
+        &mut self,
+        file: &SceneFile,
+        table_objects: &[Vec<u32>],
+        scene: &mut Scene,
+    ) -> Result<()> {
         use crate::cull::portals::floorplan::{assign_objects, convex_ccw, prism_planes};
         use crate::cull::portals::{Cell, CellGraph, CellIssueKind, Portal};
         use crate::geom::Plane;
+        if let Some(prt) = &file.prt {
+            return self.prt_cells(file, prt, scene);
+        }
         if file.cells.is_empty() {
             if let Some(p) = file.portals.first() {
                 return Err(self.error(&p.span(), "a [[portal]] needs [[cell]] tables"));
