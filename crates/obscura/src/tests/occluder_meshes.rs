@@ -4,8 +4,6 @@
 //! it; every picture stays the same; occluder meshes that leave their object, objects
 //! that are open or inside out, are refused with the file's line and the object's name.
 
-use std::path::PathBuf;
-
 use glam::{DMat4, DVec3};
 
 use crate::cull::occluders::select::OccluderCandidates;
@@ -217,13 +215,15 @@ fn occluder_meshes_outside_their_object_are_refused() {
     }
 }
 
-fn scene_dir(name: &str) -> PathBuf {
+#[cfg(feature = "toml-scene")]
+fn scene_dir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("obscura-occmesh-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
 
 /// An L-shaped prism (closed, counter-clockwise from outside unless `reversed`).
+#[cfg(feature = "toml-scene")]
 fn l_prism_obj(reversed: bool) -> String {
     let outline = [
         (0.0, 0.0),
