@@ -59,6 +59,12 @@ pub struct ViewArgs {
     /// file that refers to it.
     #[arg(long)]
     pub allow_outside_references: bool,
+    /// Cells and portals from a Quake tools' portal file (PRT1, `.prt`) for the portal
+    /// methods: each leaf's cell is the convex hull of its portals, and an object goes
+    /// in a cell only when its box lies inside one hull (see docs/culling.md). Replaces
+    /// the scene's own cells.
+    #[arg(long, value_name = "FILE.prt")]
+    pub prt: Option<std::path::PathBuf>,
     /// Memory budget of the run: 512M, 4G, 1.5GiB or bytes (default: half of the memory
     /// available). Every structure that grows with the input (frame buffers, bins, BSP
     /// fragments, octree nodes, a scene file's placed faces...) is checked against it
@@ -393,6 +399,11 @@ impl ViewArgs {
         scene.ensure_not_empty(&spec)?;
         for w in scene.report().warnings() {
             errln!("warning: {spec}: {w}");
+        }
+        let mut scene = scene;
+        if let Some(prt) = &self.prt {
+            let summary = obscura::cull::portals::prt::attach(&mut scene, prt)?;
+            errln!("note: {}: {summary}", prt.display());
         }
         Ok(Loaded {
             spec,

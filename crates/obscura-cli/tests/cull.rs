@@ -454,3 +454,85 @@ fn export_round_trips_the_face_ids() {
     let o = failed(&obscura(&["export", "demo:cube", "-o", "cube.png"], &dir));
     assert!(o.contains(".obj"), "{o}");
 }
+
+#[test]
+fn a_prt1_file_gives_the_scene_cells_and_the_picture_stays() {
+    use obscura::cull::portals::prt::{parse_prt, write_prt};
+    let dir = tempdir("prt");
+    let level = obscura::Scene::demo("level").unwrap();
+    let text = write_prt(level.cells().unwrap());
+    std::fs::write(dir.join("level.prt"), &text).unwrap();
+    // An eye inside the hull of a leaf's portals (the middle of its portal vertices),
+    // looking along x.
+    let g = parse_prt(&text, Path::new("level.prt")).unwrap();
+    let eye = (0..g.cells.len())
+        .filter(|&c| !g.cells[c].planes.is_empty())
+        .map(|c| {
+            let pts: Vec<glam::DVec3> = g
+                .portals
+                .iter()
+                .filter(|p| p.cells.contains(&(c as u32)))
+                .flat_map(|p| p.polygon.iter().copied())
+                .collect();
+            pts.iter().sum::<glam::DVec3>() / pts.len() as f64
+        })
+        .find(|&e| g.locate(e).is_some())
+        .unwrap();
+    let eye_s = format!("{},{},{}", eye.x, eye.y, eye.z);
+    let target_s = format!("{},{},{}", eye.x + 10.0, eye.y, eye.z + 1.0);
+    let view = ["--eye", &eye_s, "--target", &target_s, "--size", "160x90"];
+    let mut a = vec![
+        "cull",
+        "demo:level",
+        "--prt",
+        "level.prt",
+        "--method",
+        "portals",
+        "--stats",
+    ];
+    a.extend(view);
+    let out = ok(&obscura(&a, &dir));
+    assert!(
+        out.contains("note: level.prt:") && out.contains("leaves without volume"),
+        "{out}"
+    );
+    assert!(!out.contains("outside every cell"), "{out}");
+    let render = |cull: &str| {
+        let ids = format!("ids-{cull}.npy");
+        let depth = format!("depth-{cull}.npy");
+        let mut r = vec![
+            "render",
+            "demo:level",
+            "--prt",
+            "level.prt",
+            "--cull",
+            cull,
+            "--ids",
+            &ids,
+            "--depth",
+            &depth,
+            "-o",
+            "x.png",
+        ];
+        r.extend(view);
+        ok(&obscura(&r, &dir));
+        (npy(&dir.join(&ids)).1, npy(&dir.join(&depth)).1)
+    };
+    let base = render("none");
+    assert!(
+        render("portals") == base,
+        "--cull portals with a PRT1 file changed the picture"
+    );
+    assert!(render("screen-portals") == base);
+    // A bad file: the error names it and its line.
+    std::fs::write(
+        dir.join("bad.prt"),
+        "PRT1\n2\n1\n3 0 7 (0 0 0) (1 0 0) (0 1 0)\n",
+    )
+    .unwrap();
+    let o = failed(&obscura(&["cull", "demo:level", "--prt", "bad.prt"], &dir));
+    assert!(
+        o.contains("bad.prt") && o.contains('4') && o.contains("out of range"),
+        "{o}"
+    );
+}

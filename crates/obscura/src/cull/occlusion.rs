@@ -209,7 +209,8 @@ pub struct Culling {
     /// an object culled whole carries the object's reason.
     pub clusters: Vec<Option<CullReason>>,
     /// The occluders the method used, best first (for [`CullReason::Occluder`]): each
-    /// as the scene polygon it came from.
+    /// as the scene polygon it came from, or `u32::MAX` for a face of an object's
+    /// occluder mesh.
     pub occluders: Vec<u32>,
     /// Per scene polygon (scene order, as [`crate::View::polygon_base`]): culled.
     pub faces: Vec<bool>,

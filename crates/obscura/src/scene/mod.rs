@@ -14,6 +14,7 @@ mod camera_matrices;
 pub mod demo;
 pub mod load;
 mod mesh;
+pub mod occluder;
 pub(crate) mod random;
 
 use std::path::{Path, PathBuf};
@@ -157,6 +158,11 @@ pub struct Object {
     pub bounds: Aabb,
     /// World-space bounding sphere.
     pub sphere: Sphere,
+    /// Its occluder mesh, in world space (faces counter-clockwise seen from outside):
+    /// a simplified mesh inside the object that the occluders and occlusion-buffer
+    /// culling methods use in place of its faces, never drawn. Set with
+    /// [`Scene::set_occluder`], which checks it (see [`occluder`]).
+    pub occluder: Option<Arc<Mesh>>,
 }
 
 impl Object {
@@ -359,6 +365,7 @@ impl Scene {
             mirrored: orientation < 0.0,
             bounds,
             sphere,
+            occluder: None,
         });
         Ok(self.objects.len() - 1)
     }

@@ -546,20 +546,19 @@ fn prt1_round_trip_and_errors() {
     let path = Path::new("seed.prt");
     let g = parse_prt(&text, path).unwrap();
     assert_eq!(g.cells.len(), 5);
-    assert!(
-        g.cells
-            .iter()
-            .all(|c| c.planes.is_empty() && c.objects.is_empty())
-    );
+    // Each leaf is the hull of its portals: the seed's cells have one or two portals,
+    // on different walls for D, E, C (a volume) and alone for A and B (flat).
+    assert!(g.cells.iter().all(|c| c.objects.is_empty()));
+    let flat: Vec<bool> = g.cells.iter().map(|c| c.planes.is_empty()).collect();
+    assert_eq!(flat, [true, true, false, false, false]);
     assert_eq!(g.portals, graph.portals);
-    assert_eq!(
-        g.locate(DVec3::new(6.0, 1.0, 1.0)),
-        None,
-        "no geometry, no cell"
-    );
+    // Between DE (z = 2, x in [1, 2]) and EC (z = 0, x in [9, 10]), inside E's hull.
+    assert_eq!(g.locate(DVec3::new(6.0, 1.0, 1.0)), Some(E as u32));
+    // In A, away from its only portal: no geometry there, no cell.
+    assert_eq!(g.locate(DVec3::new(-2.0, 1.0, 4.0)), None);
     let r = g.diagnose(None);
     assert!(r.is_valid());
-    assert_eq!(r.warnings().count(), 5);
+    assert_eq!(r.warnings().count(), 2);
     // Quake III: a faces count line, a hint flag, and solid faces.
     let q3 = "PRT1\n3\n2\n1\n4 0 1 0 (0 0 0) (0 1 0) (0 1 1) (0 0 1)\n\
               3 1 2 1 (1 0 0) (1 1 0) (1 0 1)\n3 2 (5 5 5) (6 5 5) (5 6 5)\n";

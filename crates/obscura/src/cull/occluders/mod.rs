@@ -28,6 +28,14 @@
 //! removing what it hides, and another occluder can only hide it together with what it
 //! hides (shadow volumes nest).
 //!
+//! An object's occluder mesh ([`crate::scene::Object::occluder`], never drawn) gives
+//! the candidates in place of its faces. It lies inside the object's closed,
+//! outward-facing surface, so a line of sight through it crosses a drawn face of the
+//! object first; it is used only in views that have the object's whole box beyond the
+//! near plane ([`select::Candidate::usable`]), where that face is not clipped away
+//! (see [`crate::scene::occluder`]). Such an occluder is listed in
+//! [`Culling::occluders`] as `u32::MAX`.
+//!
 //! # Limits: partial occlusion and fusion
 //! One occluder at a time is tested: a box that two walls hide together, neither
 //! alone, is kept. This is the partial-occlusion problem the notes raise (after
@@ -81,7 +89,7 @@ pub fn select(
         } else {
             coorg_teller_metric(c.area, c.normal, c.centre, t.eye)
         };
-        if !(f > 0.0) {
+        if !(f > 0.0) || !c.usable(t) {
             continue;
         }
         if c.vertices.iter().any(|&v| !(-t.world_to_eye(v).z > near)) {

@@ -26,8 +26,10 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
+use crate::geom::Aabb;
 use crate::geom::newell_normal;
-use crate::scene::Scene;
+use crate::scene::{Mesh, Scene};
+use crate::view::ViewTransform;
 
 /// The most candidates kept per scene (the largest by area).
 pub const MAX_CANDIDATES: usize = 4096;
@@ -42,7 +44,8 @@ const FLATNESS: f64 = 1e-7;
 /// One candidate occluder: a convex planar polygon in world space.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Candidate {
-    /// The scene polygon it came from (the first of a merged pair).
+    /// The scene polygon it came from (the first of a merged pair); `u32::MAX` for a
+    /// face of an occluder mesh.
     pub polygon: u32,
     /// The second triangle of a merged pair.
     pub merged: Option<u32>,
@@ -59,6 +62,10 @@ pub struct Candidate {
     pub centre: DVec3,
     /// The farthest any vertex lies from the plane through [`Self::centre`].
     pub flatness: f64,
+    /// For a face of an object's occluder mesh (never drawn), the object's world box:
+    /// the candidate is used only in views that have the whole box beyond the near
+    /// plane ([`Self::usable`]). `None` for a face of the scene.
+    pub stands_for: Option<Aabb>,
 }
 
 impl Candidate {
@@ -120,7 +127,17 @@ impl Candidate {
             area,
             centre,
             flatness,
+            stands_for: None,
         })
+    }
+
+    /// Whether the candidate may be used in view `t`: always for a face of the scene;
+    /// for a face of an occluder mesh, when its object's whole box lies beyond the near
+    /// plane (see [`crate::scene::occluder`]).
+    #[must_use]
+    pub fn usable(&self, t: &ViewTransform) -> bool {
+        self.stands_for
+            .is_none_or(|b| crate::scene::occluder::box_beyond_near(&b, t))
     }
 }
 
@@ -135,96 +152,29 @@ pub struct OccluderCandidates {
 }
 
 impl OccluderCandidates {
-    /// The candidates of a scene.
+    /// The candidates of a scene: of each object, its own faces, or the faces of its
+    /// occluder mesh when it has one ([`crate::scene::Object::occluder`]).
     #[must_use]
     pub fn new(scene: &Scene) -> OccluderCandidates {
         let mut all = Vec::new();
         let mut base = 0u32;
         for (k, o) in scene.objects().iter().enumerate() {
             let n = o.mesh.polygon_count();
-            let world: Vec<DVec3> = o
-                .mesh
-                .positions()
-                .iter()
-                .map(|&p| o.transform.transform_point3(p))
-                .collect();
-            let ordered = |poly: &[u32]| -> Vec<DVec3> {
-                let mut pts: Vec<DVec3> = poly.iter().map(|&i| world[i as usize]).collect();
-                if o.mirrored {
-                    pts.reverse();
+            if let Some(occ) = &o.occluder {
+                // Already in world space, faces counter-clockwise from outside.
+                let from = all.len();
+                faces_of(occ, occ.positions(), false, k as u32, None, &mut all);
+                for c in &mut all[from..] {
+                    c.stands_for = Some(o.bounds);
                 }
-                pts
-            };
-            // Triangles by their directed edges (by position, so split vertices still
-            // meet), for merging pairs.
-            let key = |i: u32| world[i as usize].to_array().map(f64::to_bits);
-            let mut edges: HashMap<([u64; 3], [u64; 3]), u32> = HashMap::new();
-            for p in 0..n {
-                let poly = o.mesh.polygon(p);
-                if poly.len() == 3 {
-                    for e in 0..3 {
-                        edges.insert((key(poly[e]), key(poly[(e + 1) % 3])), p as u32);
-                    }
-                }
-            }
-            let mut used = vec![false; n];
-            for p in 0..n {
-                let poly = o.mesh.polygon(p);
-                if poly.len() != 3 {
-                    if let Some(c) =
-                        Candidate::from_polygon(base + p as u32, k as u32, &ordered(poly))
-                    {
-                        all.push(c);
-                    }
-                    continue;
-                }
-                if used[p] {
-                    continue;
-                }
-                used[p] = true;
-                let mut best: Option<Candidate> = None;
-                for e in 0..3 {
-                    let (a, b, c) = (poly[e], poly[(e + 1) % 3], poly[(e + 2) % 3]);
-                    let Some(&q) = edges.get(&(key(b), key(a))) else {
-                        continue;
-                    };
-                    let q = q as usize;
-                    if q == p || used[q] {
-                        continue;
-                    }
-                    let other = o.mesh.polygon(q);
-                    let Some(d) = other
-                        .iter()
-                        .copied()
-                        .find(|&i| key(i) != key(a) && key(i) != key(b))
-                    else {
-                        continue;
-                    };
-                    // The pair's outline: a, d, b, c (the shared edge a-b dropped).
-                    if let Some(mut m) =
-                        Candidate::from_polygon(base + p as u32, k as u32, &ordered(&[a, d, b, c]))
-                    {
-                        let single = newell_normal(&ordered(poly)).normalize_or_zero();
-                        if single.dot(m.normal) > 1.0 - 1e-9 {
-                            m.merged = Some(base + q as u32);
-                            best = Some(m);
-                            break;
-                        }
-                    }
-                }
-                match best {
-                    Some(m) => {
-                        used[(m.merged.unwrap_or(0) - base) as usize] = true;
-                        all.push(m);
-                    }
-                    None => {
-                        if let Some(c) =
-                            Candidate::from_polygon(base + p as u32, k as u32, &ordered(poly))
-                        {
-                            all.push(c);
-                        }
-                    }
-                }
+            } else {
+                let world: Vec<DVec3> = o
+                    .mesh
+                    .positions()
+                    .iter()
+                    .map(|&p| o.transform.transform_point3(p))
+                    .collect();
+                faces_of(&o.mesh, &world, o.mirrored, k as u32, Some(base), &mut all);
             }
             base += n as u32;
         }
@@ -263,6 +213,94 @@ impl OccluderCandidates {
     #[must_use]
     pub fn is_empty(&self) -> bool {
         self.candidates.is_empty()
+    }
+}
+
+/// Appends the candidates of one mesh: its convex planar faces of more than three
+/// vertices and its coplanar triangle pairs, from the world positions `world`
+/// (reversed when `mirrored`); `base` is the scene id of its first polygon, `None` for
+/// an occluder mesh (whose candidates carry `polygon == u32::MAX`).
+fn faces_of(
+    mesh: &Mesh,
+    world: &[DVec3],
+    mirrored: bool,
+    object: u32,
+    base: Option<u32>,
+    all: &mut Vec<Candidate>,
+) {
+    let n = mesh.polygon_count();
+    let id = |p: usize| base.map_or(u32::MAX, |b| b + p as u32);
+    let ordered = |poly: &[u32]| -> Vec<DVec3> {
+        let mut pts: Vec<DVec3> = poly.iter().map(|&i| world[i as usize]).collect();
+        if mirrored {
+            pts.reverse();
+        }
+        pts
+    };
+    // Triangles by their directed edges (by position, so split vertices still
+    // meet), for merging pairs.
+    let key = |i: u32| world[i as usize].to_array().map(f64::to_bits);
+    let mut edges: HashMap<([u64; 3], [u64; 3]), u32> = HashMap::new();
+    for p in 0..n {
+        let poly = mesh.polygon(p);
+        if poly.len() == 3 {
+            for e in 0..3 {
+                edges.insert((key(poly[e]), key(poly[(e + 1) % 3])), p as u32);
+            }
+        }
+    }
+    let mut used = vec![false; n];
+    for p in 0..n {
+        let poly = mesh.polygon(p);
+        if poly.len() != 3 {
+            if let Some(c) = Candidate::from_polygon(id(p), object, &ordered(poly)) {
+                all.push(c);
+            }
+            continue;
+        }
+        if used[p] {
+            continue;
+        }
+        used[p] = true;
+        let mut best: Option<(Candidate, usize)> = None;
+        for e in 0..3 {
+            let (a, b, c) = (poly[e], poly[(e + 1) % 3], poly[(e + 2) % 3]);
+            let Some(&q) = edges.get(&(key(b), key(a))) else {
+                continue;
+            };
+            let q = q as usize;
+            if q == p || used[q] {
+                continue;
+            }
+            let other = mesh.polygon(q);
+            let Some(d) = other
+                .iter()
+                .copied()
+                .find(|&i| key(i) != key(a) && key(i) != key(b))
+            else {
+                continue;
+            };
+            // The pair's outline: a, d, b, c (the shared edge a-b dropped).
+            if let Some(mut m) = Candidate::from_polygon(id(p), object, &ordered(&[a, d, b, c])) {
+                let single = newell_normal(&ordered(poly)).normalize_or_zero();
+                if single.dot(m.normal) > 1.0 - 1e-9 {
+                    m.merged = base.map(|_| id(q));
+                    best = Some((m, q));
+                    break;
+                }
+            }
+        }
+        match best {
+            Some((m, q)) => {
+                used[q] = true;
+                all.push(m);
+            }
+            None => {
+                if let Some(c) = Candidate::from_polygon(id(p), object, &ordered(poly)) {
+                    all.push(c);
+                }
+            }
+        }
     }
 }
 

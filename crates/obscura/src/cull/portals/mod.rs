@@ -75,7 +75,21 @@ fn prepare<'g>(
         ));
         return None;
     };
-    let starts = render::start_cells(graph, t.eye, eye_cell, render::near_radius(t));
+    let radius = render::near_radius(t);
+    if graph.partial_cells
+        && graph.cells[eye_cell as usize]
+            .planes
+            .iter()
+            .any(|pl| pl.signed_distance(t.eye) > -radius * pl.normal.length())
+    {
+        c.notes.push(format!(
+            "the viewer ({:.3}, {:.3}, {:.3}) is within the near distance of the boundary of {}, \
+             known only by its portals' hull (a PRT1 import): no portal culling",
+            t.eye.x, t.eye.y, t.eye.z, graph.cells[eye_cell as usize].name
+        ));
+        return None;
+    }
+    let starts = render::start_cells(graph, t.eye, eye_cell, radius);
     Some((graph, starts))
 }
 

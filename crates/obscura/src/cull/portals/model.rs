@@ -41,6 +41,10 @@ pub struct CellGraph {
     /// `CellIndexCache::default()`, or `..Default::default()`; after editing `cells`,
     /// call [`CellGraph::reindex`]).
     pub index: CellIndexCache,
+    /// The cells cover their regions only in part (a PRT1 import: each leaf known by the
+    /// hull of its portals, see [`super::prt`]): a view whose near rectangle may leave
+    /// the viewer's cell is not portal-culled, with a note.
+    pub partial_cells: bool,
 }
 
 /// A lazily built [`CellIndex`] (equal to any other: it is derived data).
@@ -61,6 +65,7 @@ impl CellGraph {
             cells,
             portals,
             index: CellIndexCache::default(),
+            partial_cells: false,
         }
     }
 

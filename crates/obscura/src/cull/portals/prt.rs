@@ -12,10 +12,34 @@
 //! [<point count> <leaf> (x y z) ...]                                 one line per face
 //! ```
 //!
-//! A PRT1 file has no cell geometry: the import gives a [`CellGraph`] with one cell per
-//! leaf, named `leaf N`, **without planes**, and the portals. Such cells never hold the
-//! viewer ([`CellGraph::locate`] returns `None`, and portal culling falls back to none);
-//! the graph serves the adjacency and the PVS computations that need portals only.
+//! # Cells from the portals' hulls
+//! A PRT1 file has no cell geometry, but in a BSP compiler's output the leaves are
+//! convex and disjoint, and every portal lies on the boundary of both its leaves. So
+//! the convex hull of a leaf's portal polygons lies inside the leaf. The import gives
+//! one cell per leaf, named `leaf N`, whose planes are those of that hull
+//! ([`hull_planes`], normals out, each a supporting plane of the leaf's portal
+//! vertices): [`CellGraph::locate`] finds a viewer who stands inside the hull of a
+//! leaf's portals, and says `None` for one in no hull (a leaf's corners away from its
+//! portals, or inside the walls), where portal culling falls back to none with a note.
+//! A leaf with one portal, or whose portals are coplanar (or collinear points), has a
+//! flat hull, no volume: its cell has no planes and never holds the viewer
+//! ([`CellGraph::diagnose`] warns of each such cell; [`flat_leaves`] lists them).
+//!
+//! The graph is marked [`CellGraph::partial_cells`]: the hulls cover the leaves only in
+//! part, so a view whose near rectangle may leave the hull of the viewer's cell (the
+//! eye closer to a hull plane than the near rectangle's reach, where it may cut a wall
+//! into a leaf whose hull does not reach there) is not portal-culled either, with a
+//! note. The import holds no objects; [`assign_objects_inside`] puts a scene's objects
+//! in the cells that must hold them: only an object whose box lies inside one hull is
+//! known to be in that leaf; any other object is in no cell, and so never portal-culled.
+//!
+//! Hull: an incremental convex hull (Clarkson and Shor's randomized incremental
+//! construction, here in insertion order: "Applications of random sampling in
+//! computational geometry, II", Discrete & Computational Geometry 4, 1989), points
+//! within a tolerance of a face counted inside, then every face's plane moved out to
+//! support all the points and coplanar faces merged. O(n²) for n portal vertices of a
+//! leaf (a few dozen in real maps).
+//!
 //! Other headers (`PRT2`, `PRT1-AM`) are refused with a message that says so. Every
 //! error names the file and the line; counts are checked against what is read (a
 //! header announcing a billion portals allocates nothing).
@@ -26,6 +50,8 @@ use std::path::Path;
 use glam::DVec3;
 
 use super::model::{Cell, CellGraph, Portal};
+use crate::geom::{Aabb, Plane};
+use crate::scene::Scene;
 use crate::{Error, Result};
 
 /// The most leafs a file may declare (beyond any real map, far below memory limits).
@@ -151,14 +177,219 @@ pub fn parse_prt(text: &str, path: &Path) -> Result<CellGraph> {
     for &(n, l) in faces {
         parse_polygon_line(l, 1, false).map_err(|m| err(n, m))?;
     }
-    let cells = (0..leafs)
-        .map(|i| Cell {
+    Ok(hull_cells(leafs, portals))
+}
+
+/// The graph of `leafs` cells joined by `portals`, each cell the convex hull of its
+/// portals ([`hull_planes`]; no planes when the hull is flat), marked
+/// [`CellGraph::partial_cells`].
+#[must_use]
+pub fn hull_cells(leafs: usize, portals: Vec<Portal>) -> CellGraph {
+    let mut points: Vec<Vec<DVec3>> = vec![Vec::new(); leafs];
+    for p in &portals {
+        for &c in &p.cells {
+            if let Some(v) = points.get_mut(c as usize) {
+                v.extend(&p.polygon);
+            }
+        }
+    }
+    let cells = points
+        .iter()
+        .enumerate()
+        .map(|(i, pts)| Cell {
             name: format!("leaf {i}"),
-            planes: Vec::new(),
+            planes: hull_planes(pts).unwrap_or_default(),
             objects: Vec::new(),
         })
         .collect();
-    Ok(CellGraph::new(cells, portals))
+    let mut graph = CellGraph::new(cells, portals);
+    graph.partial_cells = true;
+    graph
+}
+
+/// The cells without planes (leaves whose portals' hull is flat: one portal, coplanar
+/// portals, or none), which never hold the viewer.
+#[must_use]
+pub fn flat_leaves(graph: &CellGraph) -> Vec<u32> {
+    (0..graph.cells.len() as u32)
+        .filter(|&c| graph.cells[c as usize].planes.is_empty())
+        .collect()
+}
+
+/// The planes of the convex hull of `points`, unit normals pointing out, each moved out
+/// to the farthest point (`normal · p + d <= 0` holds for every point exactly as
+/// computed), coplanar faces merged; `None` when the hull has no volume (fewer than four
+/// points, all on a line or a plane within a tolerance relative to the points' extent)
+/// or a point is not finite.
+#[must_use]
+pub fn hull_planes(points: &[DVec3]) -> Option<Vec<Plane>> {
+    if points.len() < 4 || points.iter().any(|p| !p.is_finite()) {
+        return None;
+    }
+    // Distinct points (portals of a leaf share their corners).
+    let mut pts: Vec<DVec3> = points.to_vec();
+    pts.sort_by(|a, b| {
+        a.x.total_cmp(&b.x)
+            .then(a.y.total_cmp(&b.y))
+            .then(a.z.total_cmp(&b.z))
+    });
+    pts.dedup();
+    let b = Aabb::from_points(pts.iter().copied());
+    let size = b.extent().length();
+    if !(size > 0.0) {
+        return None;
+    }
+    let scale = b.min.abs().max(b.max.abs()).max_element().max(size);
+    let eps = 1e-9 * scale;
+    // The first tetrahedron: the extreme point in x, the farthest from it, the farthest
+    // from their line, the farthest from their plane.
+    let i0 = (0..pts.len()).min_by(|&a, &b| pts[a].x.total_cmp(&pts[b].x))?;
+    let far =
+        |f: &dyn Fn(DVec3) -> f64| (0..pts.len()).max_by(|&a, &b| f(pts[a]).total_cmp(&f(pts[b])));
+    let i1 = far(&|p| p.distance(pts[i0]))?;
+    let line = pts[i1] - pts[i0];
+    let i2 = far(&|p| line.cross(p - pts[i0]).length())?;
+    if !(line.cross(pts[i2] - pts[i0]).length() > 1e-7 * size * line.length()) {
+        return None;
+    }
+    let normal = line.cross(pts[i2] - pts[i0]).normalize();
+    let i3 = far(&|p| normal.dot(p - pts[i0]).abs())?;
+    if !(normal.dot(pts[i3] - pts[i0]).abs() > 1e-7 * size) {
+        return None;
+    }
+    // Faces as vertex triples, counter-clockwise seen from outside.
+    let mut faces: Vec<[usize; 3]> = Vec::new();
+    let inner = (pts[i0] + pts[i1] + pts[i2] + pts[i3]) / 4.0;
+    for f in [[i0, i1, i2], [i0, i1, i3], [i0, i2, i3], [i1, i2, i3]] {
+        let n = (pts[f[1]] - pts[f[0]]).cross(pts[f[2]] - pts[f[0]]);
+        faces.push(if n.dot(pts[f[0]] - inner) > 0.0 {
+            f
+        } else {
+            [f[0], f[2], f[1]]
+        });
+    }
+    let plane_of = |f: &[usize; 3]| {
+        let n = (pts[f[1]] - pts[f[0]])
+            .cross(pts[f[2]] - pts[f[0]])
+            .normalize_or_zero();
+        (n, -n.dot(pts[f[0]]))
+    };
+    for (i, &p) in pts.iter().enumerate() {
+        if [i0, i1, i2, i3].contains(&i) {
+            continue;
+        }
+        let visible: Vec<bool> = faces
+            .iter()
+            .map(|f| {
+                let (n, d) = plane_of(f);
+                n.dot(p) + d > eps
+            })
+            .collect();
+        if !visible.iter().any(|&v| v) {
+            continue;
+        }
+        // The horizon: directed edges of visible faces whose reverse is on no visible face.
+        let mut edges: Vec<(usize, usize)> = Vec::new();
+        for (f, _) in faces.iter().zip(&visible).filter(|(_, v)| **v) {
+            for e in 0..3 {
+                edges.push((f[e], f[(e + 1) % 3]));
+            }
+        }
+        let horizon: Vec<(usize, usize)> = edges
+            .iter()
+            .copied()
+            .filter(|&(a, b)| !edges.contains(&(b, a)))
+            .collect();
+        let mut k = 0;
+        faces.retain(|_| {
+            k += 1;
+            !visible[k - 1]
+        });
+        for (a, b) in horizon {
+            faces.push([a, b, i]);
+        }
+    }
+    // Planes, each moved out to support every point, coplanar faces merged.
+    let mut planes: Vec<Plane> = Vec::new();
+    for f in &faces {
+        let (n, _) = plane_of(f);
+        if n == DVec3::ZERO {
+            continue;
+        }
+        let d = -pts
+            .iter()
+            .map(|&p| n.dot(p))
+            .fold(f64::NEG_INFINITY, f64::max);
+        if planes
+            .iter()
+            .any(|q| q.normal.dot(n) > 1.0 - 1e-12 && (q.d - d).abs() <= eps)
+        {
+            continue;
+        }
+        planes.push(Plane { normal: n, d });
+    }
+    (planes.len() >= 4).then_some(planes)
+}
+
+/// Gives `scene` the cells and portals of the PRT1 file at `path` ([`read_prt`]), its
+/// objects assigned by [`assign_objects_inside`] (replacing any cells it had), and
+/// returns a line that says what was imported: leaves, portals, leaves without volume
+/// (never holding the viewer), objects in cells.
+///
+/// # Errors
+/// Those of [`read_prt`].
+pub fn attach(scene: &mut Scene, path: impl AsRef<Path>) -> Result<String> {
+    let mut graph = read_prt(path)?;
+    assign_objects_inside(&mut graph, scene);
+    let flat = flat_leaves(&graph).len();
+    let mut held = vec![false; scene.objects().len()];
+    for c in &graph.cells {
+        for &k in &c.objects {
+            held[k as usize] = true;
+        }
+    }
+    let summary = format!(
+        "{} leaves, {} portals; {flat} leaves without volume (their portals one or coplanar: \
+         the viewer is never located in them); {} of {} objects inside a leaf's portal hull \
+         (the others are never portal-culled)",
+        graph.cells.len(),
+        graph.portals.len(),
+        held.iter().filter(|&&h| h).count(),
+        held.len()
+    );
+    scene.set_cells(Some(std::sync::Arc::new(graph)));
+    Ok(summary)
+}
+
+/// Puts each object of `scene` in the cells of an imported graph that must hold it:
+/// an object whose world box lies inside the hull of one cell (within a rounding
+/// tolerance) is in that leaf, and goes in every cell whose hull its box meets; any
+/// other object may reach a leaf's part no hull covers, and is in no cell (never
+/// portal-culled). Replaces the cells' object lists. Conservative for any graph whose
+/// cells lie inside disjoint convex leaves.
+pub fn assign_objects_inside(graph: &mut CellGraph, scene: &Scene) {
+    use super::floorplan::box_meets_cell;
+    for cell in &mut graph.cells {
+        cell.objects.clear();
+    }
+    for (k, o) in scene.objects().iter().enumerate() {
+        let b = &o.bounds;
+        let eps = 1e-9 * (1.0 + b.min.abs().max_element().max(b.max.abs().max_element()));
+        let inside_one = graph.cells.iter().any(|c| {
+            !c.planes.is_empty()
+                && c.planes
+                    .iter()
+                    .all(|pl| b.corners().iter().all(|&p| pl.signed_distance(p) <= eps))
+        });
+        if !inside_one {
+            continue;
+        }
+        for cell in &mut graph.cells {
+            if !cell.planes.is_empty() && box_meets_cell(b, &cell.planes) {
+                cell.objects.push(k as u32);
+            }
+        }
+    }
 }
 
 /// `count id.. [flag] (x y z)...`: the count, the ids and the points.

@@ -76,6 +76,8 @@ struct SceneFile {
     cells: Vec<Spanned<CellSpec>>,
     #[serde(default, rename = "portal")]
     portals: Vec<Spanned<PortalSpec>>,
+    /// A Quake tools' portal file (PRT1) giving the cells instead of the tables.
+    prt: Option<Spanned<String>>,
 }
 
 /// A convex cell: `planes`, or a ground-plane polygon `floor` extruded by `height`
@@ -153,6 +155,9 @@ struct ObjectSpec {
     matrix: Option<Spanned<Vec<f64>>>,
     // Cells and portals: the cells (by name) that hold the object.
     cells: Option<Spanned<Vec<String>>>,
+    // Occluder mesh: a mesh file, or a box, in the table's coordinates.
+    occluder: Option<Spanned<String>>,
+    occluder_box: Option<Spanned<[[f64; 3]; 2]>>,
 }
 
 /// The primitives and the parameters each accepts.
@@ -263,6 +268,7 @@ impl SceneReader<'_, '_> {
                 table_objects[k].push(i as u32);
             }
         }
+        self.occluders(&file, &table_objects, &mut scene)?;
         self.cells(&file, &table_objects, &mut scene)?;
         let up = match &file.up {
             Some(up) => Some(self.direction(up.get_ref(), &up.span(), "up")?),
@@ -279,14 +285,149 @@ impl SceneReader<'_, '_> {
         Ok(scene)
     }
 
+    /// The tables' `occluder` and `occluder_box`: each object's occluder mesh, checked
+    /// ([`Scene::set_occluder`]); an error at the key's line names the object.
+    fn occluders(
+        &mut self,
+        file: &SceneFile,
+        table_objects: &[Vec<u32>],
+        scene: &mut Scene,
+    ) -> Result<()> {
+        for (k, spec) in file.objects.iter().enumerate() {
+            let o = spec.get_ref();
+            let span = match (&o.occluder, &o.occluder_box) {
+                (None, None) => continue,
+                (Some(_), Some(b)) => {
+                    return Err(self.error(
+                        &b.span(),
+                        "give either `occluder` or `occluder_box`, not both",
+                    ));
+                }
+                (Some(m), None) => m.span(),
+                (None, Some(b)) => b.span(),
+            };
+            let [object] = table_objects[k][..] else {
+                return Err(self.error(
+                    &span,
+                    format!(
+                        "an occluder mesh needs a table that places one object (this one \
+                         places {})",
+                        table_objects[k].len()
+                    ),
+                ));
+            };
+            let table = self.transform(o, &spec.span())?;
+            let (mesh, transform) = if let Some(b) = &o.occluder_box {
+                let [min, max] = b.get_ref().map(DVec3::from_array);
+                if !(min.is_finite() && max.is_finite() && min.cmplt(max).all()) {
+                    return Err(self.error(
+                        &span,
+                        "`occluder_box` is [[min x, y, z], [max x, y, z]], finite, max above \
+                         min on every axis",
+                    ));
+                }
+                (Arc::new(demo::box_mesh(min, max)), table)
+            } else {
+                let m = o.occluder.as_ref().expect("matched above");
+                let f = self.mesh_file(m, scene)?;
+                let [fo] = &f.objects[..] else {
+                    return Err(self.error(
+                        &span,
+                        format!(
+                            "\"{}\" holds {} objects: an occluder mesh file holds one",
+                            m.get_ref(),
+                            f.objects.len()
+                        ),
+                    ));
+                };
+                (fo.mesh.clone(), table * fo.transform)
+            };
+            scene
+                .set_occluder(object as usize, &mesh, transform)
+                .map_err(|e| match e {
+                    Error::InvalidObject { object, message } => {
+                        self.error(&span, format!("object \"{object}\": {message}"))
+                    }
+                    e => self.error(&span, e.to_string()),
+                })?;
+        }
+        Ok(())
+    }
+
+    /// `prt = "file.prt"`: the cells of a PRT1 file, each leaf the hull of its
+    /// portals, the objects inside a hull assigned
+    /// ([`crate::cull::portals::prt::assign_objects_inside`]). Not with `[[cell]]`,
+    /// `[[portal]]` or an object's `cells`.
+    fn prt_cells(
+        &mut self,
+        file: &SceneFile,
+        prt: &Spanned<String>,
+        scene: &mut Scene,
+    ) -> Result<()> {
+        use crate::cull::portals::prt::{assign_objects_inside, parse_prt};
+        if let Some(c) = file.cells.first() {
+            return Err(self.error(&c.span(), "give either `prt` or [[cell]] tables, not both"));
+        }
+        if let Some(p) = file.portals.first() {
+            return Err(self.error(
+                &p.span(),
+                "give either `prt` or [[portal]] tables, not both",
+            ));
+        }
+        if let Some(c) = file.objects.iter().find_map(|o| o.get_ref().cells.as_ref()) {
+            return Err(self.error(
+                &c.span(),
+                "`cells` names [[cell]] tables; with `prt` an object goes in the leaf whose \
+                 portals' hull holds it",
+            ));
+        }
+        let span = prt.span();
+        let reference = format!(
+            "referenced from {}:{}",
+            self.path.display(),
+            self.line(&span)
+        );
+        let full = self
+            .sources
+            .resolve(
+                self.path,
+                &format!("line {}", self.line(&span)),
+                prt.get_ref(),
+                Syntax::Path,
+            )
+            .map_err(|e| match e {
+                Error::Format { message, .. } => self.error(&span, message),
+                e @ Error::Io { .. } => with_reference(e, &reference),
+                e => e,
+            })?;
+        let bytes = self
+            .sources
+            .read(&full)
+            .map_err(|e| with_reference(e, &reference))?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| self.error(&span, format!("\"{}\" is not UTF-8 text", prt.get_ref())))?;
+        let mut graph = parse_prt(&text, &full).map_err(|e| with_reference(e, &reference))?;
+        assign_objects_inside(&mut graph, scene);
+        scene.set_cells(Some(Arc::new(graph)));
+        Ok(())
+    }
+
     /// The `[[cell]]` and `[[portal]]` tables: the scene's cells and portals, checked
     /// ([`CellGraph::validate`](crate::cull::portals::CellGraph::validate)); objects
     /// go in the cells their table names, or, without `cells`, in every cell their
     /// bounds meet.
-    fn cells(&self, file: &SceneFile, table_objects: &[Vec<u32>], scene: &mut Scene) -> Result<()> {
+    fn cells(
+        &mut self,
+        file: &SceneFile,
+        table_objects: &[Vec<u32>],
+        scene: &mut Scene,
+    ) -> Result<()> {
         use crate::cull::portals::floorplan::{assign_objects, convex_ccw, prism_planes};
         use crate::cull::portals::{Cell, CellGraph, CellIssueKind, Portal};
         use crate::geom::Plane;
+        if let Some(prt) = &file.prt {
+            return self.prt_cells(file, prt, scene);
+        }
         if file.cells.is_empty() {
             if let Some(p) = file.portals.first() {
                 return Err(self.error(&p.span(), "a [[portal]] needs [[cell]] tables"));
