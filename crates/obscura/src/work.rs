@@ -8,7 +8,7 @@
 //! 262k-triangle scene tests 34 billion ray-triangle pairs. Each long run is bounded
 //! two ways:
 //! - **estimated and refused before it starts**, where the work is a product of
-//!   counts known up front ([`estimate`]): the ray-triangle pairs of brute-force and
+//!   counts known up front ([`Estimate`]): the ray-triangle pairs of brute-force and
 //!   bounding-volume ray casting, the pixels the painter's algorithms paint (the sum
 //!   of the polygons' areas on screen), the pixels of the image. The estimate is
 //!   turned into seconds with the cost per item measured on the reference machine (a

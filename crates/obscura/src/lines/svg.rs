@@ -317,7 +317,7 @@ impl Placement {
     }
 }
 
-/// Options of [`to_string`] and [`write`].
+/// Options of [`to_string`] and [`write`](fn@write).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct SvgOptions {

@@ -18,7 +18,7 @@
 //!
 //! [`render`] builds what an algorithm needs (triangles, BVH, grid, BSP tree, octree)
 //! for its one call. To render many views of a scene, render through a
-//! [`SceneIndex`](crate::index::SceneIndex), which builds each once; the ray casters,
+//! [`SceneIndex`], which builds each once; the ray casters,
 //! the BSP and the octree then take a [`View`] (the view's decisions, no screen
 //! polygons).
 
@@ -324,7 +324,7 @@ impl RenderOptions {
 ///
 /// The structures an algorithm needs (triangles, BVH, grid, BSP tree, octree) are built
 /// for this call; to build them once for many views, render through a
-/// [`SceneIndex`](crate::index::SceneIndex).
+/// [`SceneIndex`].
 pub fn render(
     algorithm: Algorithm,
     view: &PreparedView<'_>,

@@ -2,7 +2,7 @@
 
 use crate::cull::backface::BackfaceMode;
 
-/// Options of [`prepare`].
+/// Options of [`prepare`](super::prepare).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[non_exhaustive]
 pub struct PrepareOptions {
@@ -11,7 +11,7 @@ pub struct PrepareOptions {
     /// Whether whole objects are culled by their bounding sphere and box.
     pub frustum_cull_objects: bool,
     /// The memory budget of the prepared view in bytes (see [`crate::budget`]):
-    /// [`prepare`] estimates its vertices and polygons before it allocates them and
+    /// [`prepare`](super::prepare) estimates its vertices and polygons before it allocates them and
     /// refuses a view over the budget. `None`: the default budget.
     pub memory_limit: Option<u64>,
 }

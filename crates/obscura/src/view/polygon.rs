@@ -44,7 +44,7 @@ impl<'a> ViewPolygon<'a> {
         self.indices.iter().map(move |&i| &v[i as usize])
     }
 
-    /// Indices of the vertices in [`PreparedView::vertices`].
+    /// Indices of the vertices in [`PreparedView::vertices`](super::PreparedView::vertices).
     #[must_use]
     pub fn indices(&self) -> &'a [u32] {
         self.indices

@@ -19,7 +19,7 @@ pub struct StageStats {
     pub ms: f64,
 }
 
-/// The stages of [`prepare`], in order.
+/// The stages of [`prepare`](super::prepare), in order.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct PipelineStats {
     /// One entry per stage.

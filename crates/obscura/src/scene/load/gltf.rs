@@ -47,7 +47,7 @@
 //! Errors (naming the file and the element): invalid JSON or GLB container, a missing,
 //! remote or short buffer (naming it and its URI), an accessor outside its buffer view,
 //! a wrong accessor type, a non-finite position or node transform, a position beyond
-//! [`MAX_COORDINATE`](crate::scene::MAX_COORDINATE) (in the accessor, or in world space
+//! [`MAX_COORDINATE`] (in the accessor, or in world space
 //! under a node's transform), an index not below the primitive's vertex count, a node
 //! with two parents, a scene root that has a parent, a cycle of children.
 //! Nodes whose world transform is singular (scale 0, used to hide nodes) and

@@ -19,7 +19,7 @@
 //!
 //! Rules shared by every loader (see `docs/ARCHITECTURE.md`):
 //! - a file named inside another (a glTF buffer, an OBJ `mtllib`, a scene file's mesh)
-//!   is resolved by one rule, [`reference`]'s: relative to the referring file's folder
+//!   is resolved by one rule, `reference`'s: relative to the referring file's folder
 //!   and inside its tree, unless [`LoadOptions::allow_outside_references`] is set; every
 //!   file a load reads is recorded ([`Scene::source_files`]);
 //! - messages never quote bytes of a file other than the one being parsed (a glTF
