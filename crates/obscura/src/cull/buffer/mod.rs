@@ -64,6 +64,17 @@ pub enum BufferKind {
     HierarchicalZ,
 }
 
+/// In which order units give their occluders (see [`BufferOptions::occluder_order`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum OccluderOrder {
+    /// The units of largest screen rectangle first.
+    #[default]
+    Largest,
+    /// The units of nearest box first.
+    Nearest,
+}
+
 /// Options of the occlusion buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
@@ -83,6 +94,15 @@ pub struct BufferOptions {
     /// The occluder budget: triangles rasterized at most, taken from the units of
     /// largest screen area first.
     pub occluder_triangles: u32,
+    /// The order in which units give their occluders until the budget is spent.
+    pub occluder_order: OccluderOrder,
+    /// The smallest occluder triangle drawn, in buffer pixels of area: a unit's
+    /// polygons are taken largest first while their area, as seen from the unit's
+    /// nearest depth, reaches it, and a triangle that projects smaller is not drawn
+    /// (0: every front-facing polygon of a unit taken). A triangle of a few pixels
+    /// covers few whole tiles of the buffer and costs its set-up; in a scene that is
+    /// one big mesh, a cluster's box is large while most of its triangles are small.
+    pub occluder_min_area: u32,
     /// The rasterizer's compiled variant (every one gives the same buffer).
     pub kernel: Kernel,
 }
@@ -95,6 +115,8 @@ impl Default for BufferOptions {
             max_width: 1024,
             keep_image: false,
             occluder_triangles: 1 << 12,
+            occluder_order: OccluderOrder::Largest,
+            occluder_min_area: 0,
             kernel: Kernel::Auto,
         }
     }
@@ -137,6 +159,10 @@ struct Unit {
     area: f64,
     /// The nearest key of its box (`+inf` when it crosses the near plane).
     key: f32,
+    /// The nearest eye-space depth of its box (0 when it crosses the near plane).
+    depth: f64,
+    /// How many of its polygons are drawn as occluders (clusters: the first ones).
+    take: u32,
 }
 
 /// The occlusion buffer and its scratch space, reused frame to frame (no allocation
@@ -227,6 +253,11 @@ impl OcclusionBuffer {
     /// rectangle outside the viewport, or a coordinate that is not finite.
     #[must_use]
     pub fn project_box(&self, t: &ViewTransform, b: &Aabb) -> Option<BoxRect> {
+        self.project_box_depth(t, b).map(|(r, _)| r)
+    }
+
+    /// [`Self::project_box`] and the nearest eye-space depth of the box.
+    fn project_box_depth(&self, t: &ViewTransform, b: &Aabb) -> Option<(BoxRect, f64)> {
         if b.is_empty() {
             return None;
         }
@@ -273,14 +304,17 @@ impl OcclusionBuffer {
         let key = f32_up(key + DEPTH_MARGIN * key.abs() + 1e-12);
         let d = self.divisor;
         let (bx0, by0, bx1, by1) = (i0 as u32 / d, j0 as u32 / d, i1 as u32 / d, j1 as u32 / d);
-        Some(BoxRect {
-            x0: bx0,
-            y0: by0,
-            x1: bx1.min(self.width - 1),
-            y1: by1.min(self.height - 1),
-            key,
-            area: f64::from(bx1 - bx0 + 1) * f64::from(by1 - by0 + 1),
-        })
+        Some((
+            BoxRect {
+                x0: bx0,
+                y0: by0,
+                x1: bx1.min(self.width - 1),
+                y1: by1.min(self.height - 1),
+                key,
+                area: f64::from(bx1 - bx0 + 1) * f64::from(by1 - by0 + 1),
+            },
+            dmin,
+        ))
     }
 
     /// The buffer as eye-space depths (see [`BufferImage`]).
@@ -340,52 +374,84 @@ impl OcclusionBuffer {
             if o.mesh.polygon_count() == 0 || c.objects[k].is_some() {
                 continue;
             }
-            let area = |b: &Aabb| {
-                self.project_box(t, b)
-                    .map_or((full, f32::INFINITY), |r| (r.area, r.key))
+            let unit = |b: &Aabb, cluster: usize| {
+                let (area, key, depth) = self
+                    .project_box_depth(t, b)
+                    .map_or((full, f32::INFINITY, 0.0), |(r, d)| (r.area, r.key, d));
+                Unit {
+                    object: k as u32,
+                    cluster: cluster as u32,
+                    area,
+                    key,
+                    depth,
+                    take: 0,
+                }
             };
             if options.clusters {
                 for cl in clusters.of_object(k) {
                     if c.clusters[cl].is_none() {
-                        let (a, key) = area(clusters.bounds(cl));
-                        units.push(Unit {
-                            object: k as u32,
-                            cluster: cl as u32,
-                            area: a,
-                            key,
-                        });
+                        units.push(unit(clusters.bounds(cl), cl));
                     }
                 }
             } else {
-                let (a, key) = area(&o.bounds);
-                units.push(Unit {
-                    object: k as u32,
-                    cluster: u32::MAX,
-                    area: a,
-                    key,
-                });
+                units.push(unit(&o.bounds, u32::MAX as usize));
             }
         }
-        units.sort_unstable_by(|a, b| b.area.total_cmp(&a.area));
+        match bo.occluder_order {
+            OccluderOrder::Largest => units.sort_unstable_by(|a, b| b.area.total_cmp(&a.area)),
+            OccluderOrder::Nearest => units.sort_unstable_by(|a, b| a.depth.total_cmp(&b.depth)),
+        }
         // Occluder triangles.
         self.tris.clear();
         let budget = bo.occluder_triangles as usize;
+        let min_area = f64::from(bo.occluder_min_area);
+        // Buffer pixels per world unit at eye depth 1 (perspective) or anywhere
+        // (orthographic).
+        let scale = t.projection.y_axis.y.abs() * 0.5 * t.height / f64::from(self.divisor);
         let mut used_units = 0usize;
         // The units within the budget, then drawn nearest first: a tile filled by
         // near occluders refuses the farther ones at once (MSOC draws front to back for
         // the same reason).
         let mut selected = 0usize;
         let mut triangles = 0usize;
-        for u in &units {
-            if triangles >= budget || u.area < 2.0 {
+        let mut at = 0usize;
+        while at < units.len() && triangles < budget {
+            let u = &mut units[at];
+            at += 1;
+            if bo.occluder_order == OccluderOrder::Largest && u.area < 2.0 {
                 break;
             }
-            selected += 1;
-            triangles += if u.cluster == u32::MAX {
-                scene.objects()[u.object as usize].mesh.triangle_count()
+            let o = &scene.objects()[u.object as usize];
+            let (take, tris) = if u.cluster == u32::MAX {
+                (o.mesh.polygon_count(), o.mesh.triangle_count())
+            } else if min_area > 0.0 {
+                // World area of the smallest polygon worth drawing from this unit.
+                let s = if t.orthographic {
+                    scale
+                } else {
+                    scale / u.depth.max(t.near.max(t.near_limit))
+                };
+                let least = min_area / (s * s);
+                let cl = u.cluster as usize;
+                let areas = clusters.areas(cl);
+                let take = areas.partition_point(|&a| f64::from(a) >= least);
+                let polys = &clusters.polygons(cl)[..take];
+                let tris = polys
+                    .iter()
+                    .map(|&p| o.mesh.polygon(p as usize).len() - 2)
+                    .sum();
+                (take, tris)
             } else {
-                clusters.triangles(u.cluster as usize) as usize
+                let cl = u.cluster as usize;
+                (clusters.polygons(cl).len(), clusters.triangles(cl) as usize)
             };
+            if take == 0 {
+                continue;
+            }
+            u.take = take as u32;
+            triangles += tris;
+            units.swap(selected, at - 1);
+            selected += 1;
         }
         units[..selected].sort_unstable_by(|a, b| b.key.total_cmp(&a.key));
         for u in &units[..selected] {
@@ -394,11 +460,11 @@ impl OcclusionBuffer {
             let mv = t.model_view(&o.transform);
             if u.cluster == u32::MAX {
                 for p in 0..o.mesh.polygon_count() as u32 {
-                    self.emit(t, &mv, o, p);
+                    self.emit(t, &mv, o, p, min_area);
                 }
             } else {
-                for &p in clusters.polygons(u.cluster as usize) {
-                    self.emit(t, &mv, o, p);
+                for &p in &clusters.polygons(u.cluster as usize)[..u.take as usize] {
+                    self.emit(t, &mv, o, p, min_area);
                 }
             }
         }
@@ -471,6 +537,7 @@ impl OcclusionBuffer {
         mv: &crate::view::ModelView,
         o: &crate::scene::Object,
         p: u32,
+        min_area: f64,
     ) {
         let pos = o.mesh.positions();
         self.eye.clear();
@@ -539,7 +606,12 @@ impl OcclusionBuffer {
         let mut prev = project(self.clipped[1]);
         for &e in &self.clipped[2..] {
             let v = project(e);
-            self.tris.push([v0, prev, v]);
+            let area = ((prev[0] - v0[0]) * (v[1] - v0[1]) - (prev[1] - v0[1]) * (v[0] - v0[0]))
+                .abs()
+                * 0.5;
+            if area >= min_area {
+                self.tris.push([v0, prev, v]);
+            }
             prev = v;
         }
     }
