@@ -217,9 +217,11 @@ fn occluder_choices(
     for order in orders {
         for &area in &areas {
             for &budget in &budgets {
-                for max_width in [1024u32, 0] {
-                    let label =
-                        format!("{order:?} area>={area} budget {budget} width<={max_width}");
+                for (max_width, queries) in [(1024u32, false), (0, false), (1024, true), (0, true)]
+                {
+                    let label = format!(
+                        "{order:?} area>={area} budget {budget} width<={max_width} queries {queries}"
+                    );
                     if only.as_deref().is_some_and(|o| !label.contains(o)) {
                         continue;
                     }
@@ -228,6 +230,7 @@ fn occluder_choices(
                     o.buffer.occluder_min_area = area;
                     o.buffer.occluder_triangles = budget;
                     o.buffer.max_width = max_width;
+                    o.buffer.occluder_queries = queries;
                     let mut last = None;
                     let (best, median) = time(runs, || {
                         last = Some(index.cull(camera, vp, &o).unwrap());
@@ -249,7 +252,17 @@ fn occluder_choices(
                             leaks += 1;
                         }
                     }
-                    let note = c.notes.last().cloned().unwrap_or_default();
+                    let stages: Vec<String> = c
+                        .stats
+                        .stages
+                        .iter()
+                        .map(|(n, ms)| format!("{n} {ms:.2}"))
+                        .collect();
+                    let note = format!(
+                        "{}; last run: {}",
+                        c.notes.last().cloned().unwrap_or_default(),
+                        stages.join(", ")
+                    );
                     println!(
                         "  {label}: {n} clusters ({tris} triangles) culled in {best:.2} ms (median                          {median:.2}){}; {note}",
                         if leaks > 0 {
