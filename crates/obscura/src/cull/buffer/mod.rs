@@ -104,8 +104,10 @@ pub struct BufferOptions {
     /// one big mesh, a cluster's box is large while most of its triangles are small.
     pub occluder_min_area: u32,
     /// Test each occluder triangle against the buffer before drawing it, and skip it
-    /// when it lies behind the buffer over its whole rectangle (it could make no pixel
-    /// nearer): less overdraw when near occluders come first.
+    /// when the buffer is already nearer over its whole rectangle (it could make no
+    /// pixel nearer): less overdraw when near occluders come first. (Skipping
+    /// triangles hidden at most of their pixels was tried: the pixels left are often
+    /// the ones no other occluder covers, and fewer boxes were culled.)
     pub occluder_queries: bool,
     /// The rasterizer's compiled variant (every one gives the same buffer).
     pub kernel: Kernel,
@@ -496,9 +498,8 @@ impl OcclusionBuffer {
                 }
                 let (x0, y0) = (x0.floor().max(0.0), y0.floor().max(0.0));
                 let (x1, y1) = (x1.ceil().min(w), y1.ceil().min(h));
-                if x0 <= x1
-                    && y0 <= y1
-                    && self.hidden(&BoxRect {
+                if !(x0 <= x1 && y0 <= y1)
+                    || self.hidden(&BoxRect {
                         x0: x0 as u32,
                         y0: y0 as u32,
                         x1: x1 as u32,
