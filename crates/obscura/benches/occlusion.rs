@@ -11,7 +11,12 @@
 //!    drawn into an empty 1920x1080 masked buffer, in million triangles per second,
 //!    for the portable and the AVX2 build (MSOC's figure on this kind of machine: 25-27);
 //! 2. Sponza (`SPONZA`, default `../shared/data/sponza.obj` beside the checkout) from the
-//!    atrium camera of that folder's README at 1920x1080: the buffer's whole frame,
+//!    atrium camera of that folder's README at 1920x1080: first the ceiling (the
+//!    clusters the frustum keeps of which the whole scene's z-buffer shows no face,
+//!    and their triangles: the most any method can cull); with `CHOICES=LABEL` (a
+//!    substring of the labels, empty for all) the occluder choices instead (order,
+//!    smallest triangle, budget, resolution, queries: clusters and triangles culled,
+//!    stages, and a check that no culled cluster is seen); else the buffer's whole frame,
 //!    occluders selected, rasterized and every cluster's bounds tested (no frustum
 //!    stage), with its stages, and how many clusters it culls; both kinds;
 //! 3. whether culling pays: Sponza, and the city demo from street level, rendered by

@@ -12,11 +12,16 @@
 //!    could reach), and its nearest depth key, rounded towards nearer. A box with a
 //!    corner at or in front of the near plane has neither and is never culled.
 //! 2. **Occluders**: units ranked by the area of their screen rectangle (a box that
-//!    crosses the near plane ranks first), taken in that order until
+//!    crosses the near plane ranks first), or nearest box first
+//!    ([`BufferOptions::occluder_order`]), taken in that order until
 //!    [`BufferOptions::occluder_triangles`] triangles; of each, the front-facing
 //!    polygons only (back faces may be culled by the view, so they are no proof of
 //!    occlusion), clipped to the near plane, cut into triangles in a fan (the
-//!    polygons are convex).
+//!    polygons are convex). A cluster lists its polygons largest first, so with
+//!    [`BufferOptions::occluder_min_area`] only those that can cover that many buffer
+//!    pixels are taken (a scene that is one big mesh has big walls and floors among
+//!    much small detail). They are drawn nearest unit first, each triangle tested
+//!    against the buffer before if [`BufferOptions::occluder_queries`].
 //! 3. **The buffer**: the triangles rasterized conservatively ([`raster`]): a pixel
 //!    counts covered only if every viewport sample it stands for lies inside the
 //!    triangle, and its key is the triangle's farthest over the tile (masked) or the
