@@ -11,7 +11,12 @@
 //!    drawn into an empty 1920x1080 masked buffer, in million triangles per second,
 //!    for the portable and the AVX2 build (MSOC's figure on this kind of machine: 25-27);
 //! 2. Sponza (`SPONZA`, default `../shared/data/sponza.obj` beside the checkout) from the
-//!    atrium camera of that folder's README at 1920x1080: the buffer's whole frame,
+//!    atrium camera of that folder's README at 1920x1080: first the ceiling (the
+//!    clusters the frustum keeps of which the whole scene's z-buffer shows no face,
+//!    and their triangles: the most any method can cull); with `CHOICES=LABEL` (a
+//!    substring of the labels, empty for all) the occluder choices instead (order,
+//!    smallest triangle, budget, resolution, queries: clusters and triangles culled,
+//!    stages, and a check that no culled cluster is seen); else the buffer's whole frame,
 //!    occluders selected, rasterized and every cluster's bounds tested (no frustum
 //!    stage), with its stages, and how many clusters it culls; both kinds;
 //! 3. whether culling pays: Sponza, and the city demo from street level, rendered by
@@ -20,8 +25,8 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use obscura::cull::buffer::{BufferKind, OcclusionBuffer};
-use obscura::cull::occlusion::{CullMethod, CullOptions, Culling};
+use obscura::cull::buffer::{BufferKind, OccluderOrder, OcclusionBuffer};
+use obscura::cull::occlusion::{CullMethod, CullOptions, CullReason, Culling};
 use obscura::surface::zbuffer::Kernel;
 use obscura::surface::{Algorithm, RenderOptions};
 use obscura::view::ViewTransform;
@@ -138,6 +143,156 @@ fn buffer_frame(name: &str, scene: &Scene, camera: &Camera, runs: usize) {
     }
 }
 
+/// The exact answer from one camera: the clusters the frustum stage keeps that the
+/// whole scene's z-buffer shows no face of (truly hidden), and their triangles: the
+/// most any occlusion method can cull. Returns, per scene polygon, whether it is seen.
+fn ceiling(name: &str, index: &SceneIndex<'_>, camera: &Camera, vp: Viewport) -> Vec<bool> {
+    let scene = index.scene();
+    let view = View::new(scene, camera, vp, &PrepareOptions::default()).unwrap();
+    let (frame, _) = index
+        .render_view(&view, Algorithm::ZBuffer, &RenderOptions::default())
+        .unwrap();
+    let faces = scene.face_count() as usize;
+    let mut seen_face = vec![false; faces];
+    for &id in &frame.ids {
+        if id != obscura::BACKGROUND {
+            seen_face[id as usize] = true;
+        }
+    }
+    // Per scene polygon (scene order), whether its face is seen.
+    let mut seen = Vec::new();
+    for o in scene.objects() {
+        for p in 0..o.mesh.polygon_count() {
+            seen.push(seen_face[(o.first_face + o.mesh.polygon_face(p)) as usize]);
+        }
+    }
+    let frustum = index
+        .cull(camera, vp, &CullOptions::with_method(CullMethod::Frustum))
+        .unwrap();
+    let clusters = index.clusters();
+    let mut base = Vec::new();
+    let mut b = 0usize;
+    for o in scene.objects() {
+        base.push(b);
+        b += o.mesh.polygon_count();
+    }
+    let (mut kept, mut kept_tris, mut hidden, mut hidden_tris) = (0, 0u64, 0, 0u64);
+    let (mut tris_in, mut tris_seen) = (0u64, 0u64);
+    for cl in 0..clusters.len() {
+        if frustum.clusters[cl].is_some() {
+            continue;
+        }
+        let k = clusters.object(cl) as usize;
+        let o = &scene.objects()[k];
+        let tris = u64::from(clusters.triangles(cl));
+        kept += 1;
+        kept_tris += tris;
+        let mut any = false;
+        for &p in clusters.polygons(cl) {
+            let n = o.mesh.polygon(p as usize).len() as u64 - 2;
+            tris_in += n;
+            if seen[base[k] + p as usize] {
+                any = true;
+                tris_seen += n;
+            }
+        }
+        if !any {
+            hidden += 1;
+            hidden_tris += tris;
+        }
+    }
+    println!(
+        "{name} ceiling: of {kept} clusters ({kept_tris} triangles) the frustum keeps, {hidden}          ({hidden_tris} triangles, {:.1}%) are truly hidden (no face in the whole z-buffer);          triangles: {tris_seen} of {tris_in} seen ({:.1}% hidden)",
+        100.0 * hidden_tris as f64 / kept_tris.max(1) as f64,
+        100.0 * (tris_in - tris_seen) as f64 / tris_in.max(1) as f64
+    );
+    seen
+}
+
+/// The occluder choices of the buffer on one view: culled clusters and triangles,
+/// the culling time, and a check that nothing culled is seen.
+fn occluder_choices(
+    index: &SceneIndex<'_>,
+    camera: &Camera,
+    vp: Viewport,
+    seen: &[bool],
+    runs: usize,
+) {
+    let scene = index.scene();
+    let clusters = index.clusters();
+    let mut base = Vec::new();
+    let mut b = 0usize;
+    for o in scene.objects() {
+        base.push(b);
+        b += o.mesh.polygon_count();
+    }
+    let orders = [OccluderOrder::Largest, OccluderOrder::Nearest];
+    let areas = [0u32, 8, 32, 128, 512];
+    let budgets = [1u32 << 12, 1 << 14, 1 << 16];
+    let only = std::env::var("CHOICES").ok();
+    for order in orders {
+        for &area in &areas {
+            for &budget in &budgets {
+                for (max_width, queries) in [(1024u32, false), (0, false), (1024, true), (0, true)]
+                {
+                    let label = format!(
+                        "{order:?} area>={area} budget {budget} width<={max_width} queries {queries}"
+                    );
+                    if only.as_deref().is_some_and(|o| !label.contains(o)) {
+                        continue;
+                    }
+                    let mut o = CullOptions::with_method(CullMethod::Buffer);
+                    o.buffer.occluder_order = order;
+                    o.buffer.occluder_min_area = area;
+                    o.buffer.occluder_triangles = budget;
+                    o.buffer.max_width = max_width;
+                    o.buffer.occluder_queries = queries;
+                    let mut last = None;
+                    let (best, median) = time(runs, || {
+                        last = Some(index.cull(camera, vp, &o).unwrap());
+                    });
+                    let c = last.unwrap();
+                    let (mut n, mut tris, mut leaks) = (0, 0u64, 0);
+                    for cl in 0..clusters.len() {
+                        if c.clusters[cl] != Some(CullReason::Buffer) {
+                            continue;
+                        }
+                        n += 1;
+                        tris += u64::from(clusters.triangles(cl));
+                        let k = clusters.object(cl) as usize;
+                        if clusters
+                            .polygons(cl)
+                            .iter()
+                            .any(|&p| seen[base[k] + p as usize])
+                        {
+                            leaks += 1;
+                        }
+                    }
+                    let stages: Vec<String> = c
+                        .stats
+                        .stages
+                        .iter()
+                        .map(|(n, ms)| format!("{n} {ms:.2}"))
+                        .collect();
+                    let note = format!(
+                        "{}; last run: {}",
+                        c.notes.last().cloned().unwrap_or_default(),
+                        stages.join(", ")
+                    );
+                    println!(
+                        "  {label}: {n} clusters ({tris} triangles) culled in {best:.2} ms (median                          {median:.2}){}; {note}",
+                        if leaks > 0 {
+                            format!(" LEAK: {leaks} seen clusters culled")
+                        } else {
+                            String::new()
+                        }
+                    );
+                }
+            }
+        }
+    }
+}
+
 fn pays(name: &str, scene: &Scene, cameras: &[Camera], vp: Viewport, runs: usize) {
     let index = SceneIndex::new(scene);
     let po = PrepareOptions::default();
@@ -180,6 +335,13 @@ fn main() {
     }
     match sponza::atrium() {
         Ok((sponza, camera)) => {
+            let vp = Viewport::new(1920, 1080).unwrap();
+            let index = SceneIndex::new(&sponza);
+            let seen = ceiling("sponza atrium", &index, &camera, vp);
+            if std::env::var("CHOICES").is_ok() {
+                occluder_choices(&index, &camera, vp, &seen, runs);
+                return;
+            }
             buffer_frame("sponza", &sponza, &camera, runs);
             pays(
                 "sponza atrium",

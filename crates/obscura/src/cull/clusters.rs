@@ -2,10 +2,15 @@
 //! with its own world-space box, so that a scene made of one big object (Sponza) can
 //! be culled piece by piece.
 //!
-//! Each object's polygons are ordered along a Morton (Z-order) curve of their
-//! centroids, then cut into runs of about [`CLUSTER_TRIANGLES`] triangles: neighbours
-//! in space end up in the same cluster, so its box stays small. An object of fewer
-//! triangles is one cluster. Built once per scene ([`SceneIndex::clusters`]).
+//! Each object's polygons are split top down, as a bounding-volume hierarchy is built,
+//! by the binned surface-area heuristic over their centroids (Wald 2007), until a part
+//! holds at most [`CLUSTER_TRIANGLES`] triangles: neighbours in space end up in the
+//! same cluster and boxes stay small, and big polygons (walls, floors) are kept apart
+//! from small detail whose box they would swell. (Runs of a Morton curve, the first
+//! version, left Sponza's clusters so large that no occlusion method culled one.) An
+//! object of at most that many triangles is one cluster. In each cluster the polygons
+//! are listed largest first: the occlusion buffer draws a cluster's big polygons as
+//! occluders. Built once per scene ([`SceneIndex::clusters`]).
 
 use glam::DVec3;
 
@@ -26,8 +31,11 @@ pub struct Clusters {
     object: Vec<u32>,
     /// Per cluster, its first entry in `polygons`; then the total.
     starts: Vec<u32>,
-    /// Polygon numbers local to the object (its mesh's polygons), cluster by cluster.
+    /// Polygon numbers local to the object (its mesh's polygons), cluster by cluster;
+    /// in each cluster, largest world-space area first.
     polygons: Vec<u32>,
+    /// The world-space area of each entry of `polygons`.
+    areas: Vec<f32>,
     /// Per cluster, its world-space box.
     bounds: Vec<Aabb>,
     /// Per cluster, its triangle count.
@@ -41,7 +49,8 @@ impl Clusters {
     #[must_use]
     pub fn new(scene: &Scene) -> Clusters {
         let mut c = Clusters::default();
-        let mut order: Vec<(u64, u32)> = Vec::new();
+        let mut items: Vec<Item> = Vec::new();
+        let mut stack: Vec<(usize, usize)> = Vec::new();
         for (k, o) in scene.objects().iter().enumerate() {
             c.object_first.push(c.object.len() as u32);
             let mesh = &o.mesh;
@@ -50,53 +59,71 @@ impl Clusters {
                 continue;
             }
             let (starts, indices, _) = mesh.polygon_arrays();
-            let positions = mesh.positions();
-            let world: Vec<DVec3> = positions
+            let world: Vec<DVec3> = mesh
+                .positions()
                 .iter()
                 .map(|&p| o.transform.transform_point3(p))
                 .collect();
-            let centroid = |p: usize| {
+            items.clear();
+            items.extend((0..n).map(|p| {
                 let poly = &indices[starts[p] as usize..starts[p + 1] as usize];
-                poly.iter().map(|&i| world[i as usize]).sum::<DVec3>() / poly.len() as f64
-            };
-            let b = Aabb::from_points(world.iter().copied());
-            let size = b.extent().max(DVec3::splat(1e-300));
-            order.clear();
-            order.extend((0..n).map(|p| {
-                let q = ((centroid(p) - b.min) / size).clamp(DVec3::ZERO, DVec3::ONE);
-                let cell = |v: f64| (v * 2_097_151.0) as u64;
-                (morton3(cell(q.x), cell(q.y), cell(q.z)), p as u32)
+                let bounds = Aabb::from_points(poly.iter().map(|&i| world[i as usize]));
+                let a = world[poly[0] as usize];
+                // The polygon's area (its fan's), for ranking occluders.
+                let area = poly
+                    .windows(2)
+                    .skip(1)
+                    .map(|w| {
+                        (world[w[0] as usize] - a)
+                            .cross(world[w[1] as usize] - a)
+                            .length()
+                    })
+                    .sum::<f64>()
+                    * 0.5;
+                Item {
+                    polygon: p as u32,
+                    triangles: (poly.len() - 2) as u32,
+                    centroid: bounds.center(),
+                    bounds,
+                    area: area as f32,
+                }
             }));
-            order.sort_unstable();
-            let mut run_triangles = 0usize;
-            let mut run_bounds = Aabb::default();
-            for (i, &(_, p)) in order.iter().enumerate() {
-                if i == 0 || run_triangles >= CLUSTER_TRIANGLES {
-                    if i > 0 {
-                        c.close(run_bounds, run_triangles);
-                    }
-                    c.object.push(k as u32);
-                    c.starts.push(c.polygons.len() as u32);
-                    run_triangles = 0;
-                    run_bounds = Aabb::default();
+            // Top-down: split until a node holds at most CLUSTER_TRIANGLES triangles.
+            stack.clear();
+            stack.push((0, items.len()));
+            while let Some((lo, hi)) = stack.pop() {
+                let node = &mut items[lo..hi];
+                let triangles: usize = node.iter().map(|i| i.triangles as usize).sum();
+                if triangles <= CLUSTER_TRIANGLES || node.len() == 1 {
+                    c.push_cluster(k, node);
+                    continue;
                 }
-                let poly = &indices[starts[p as usize] as usize..starts[p as usize + 1] as usize];
-                run_triangles += poly.len() - 2;
-                for &v in poly {
-                    run_bounds = run_bounds.with_point(world[v as usize]);
-                }
-                c.polygons.push(p);
+                let mid = lo + split(node);
+                stack.push((mid, hi));
+                stack.push((lo, mid));
             }
-            c.close(run_bounds, run_triangles);
         }
         c.object_first.push(c.object.len() as u32);
         c.starts.push(c.polygons.len() as u32);
         c
     }
 
-    fn close(&mut self, bounds: Aabb, triangles: usize) {
+    /// Appends a cluster of object `k` made of `items`, largest polygons first (the
+    /// occlusion buffer takes a cluster's occluders from the front of its list).
+    fn push_cluster(&mut self, k: usize, items: &mut [Item]) {
+        items.sort_unstable_by(|a, b| b.area.total_cmp(&a.area).then(a.polygon.cmp(&b.polygon)));
+        self.object.push(k as u32);
+        self.starts.push(self.polygons.len() as u32);
+        let mut bounds = Aabb::default();
+        let mut triangles = 0u32;
+        for i in items.iter() {
+            self.polygons.push(i.polygon);
+            self.areas.push(i.area);
+            bounds = bounds.union(i.bounds);
+            triangles += i.triangles;
+        }
         self.bounds.push(bounds);
-        self.triangles.push(triangles as u32);
+        self.triangles.push(triangles);
     }
 
     /// The number of clusters.
@@ -117,10 +144,18 @@ impl Clusters {
         self.object[c]
     }
 
-    /// The polygons of cluster `c`, numbered in its object's mesh.
+    /// The polygons of cluster `c`, numbered in its object's mesh, largest world-space
+    /// area first.
     #[must_use]
     pub fn polygons(&self, c: usize) -> &[u32] {
         &self.polygons[self.starts[c] as usize..self.starts[c + 1] as usize]
+    }
+
+    /// The world-space areas of the polygons of cluster `c`, in the order of
+    /// [`Self::polygons`] (largest first).
+    #[must_use]
+    pub fn areas(&self, c: usize) -> &[f32] {
+        &self.areas[self.starts[c] as usize..self.starts[c + 1] as usize]
     }
 
     /// The world-space box of cluster `c`.
@@ -142,17 +177,79 @@ impl Clusters {
     }
 }
 
-/// Interleaves the low 21 bits of three coordinates.
-fn morton3(x: u64, y: u64, z: u64) -> u64 {
-    fn spread(v: u64) -> u64 {
-        let mut v = v & 0x1f_ffff;
-        v = (v | v << 32) & 0x1f_0000_0000_ffff;
-        v = (v | v << 16) & 0x1f_0000_ff00_00ff;
-        v = (v | v << 8) & 0x100f_00f0_0f00_f00f;
-        v = (v | v << 4) & 0x10c3_0c30_c30c_30c3;
-        (v | v << 2) & 0x1249_2492_4924_9249
+/// A polygon while clusters are built.
+#[derive(Clone, Copy, Debug)]
+struct Item {
+    polygon: u32,
+    triangles: u32,
+    centroid: DVec3,
+    bounds: Aabb,
+    area: f32,
+}
+
+/// The bins of a split along one axis.
+const BINS: usize = 16;
+
+/// Reorders `items` (more than one) into two non-empty halves and returns the size of
+/// the first: the binned split of least surface-area cost (Wald, "On fast
+/// construction of SAH-based bounding volume hierarchies", 2007) over the centroids,
+/// or halves by count when the centroids coincide.
+fn split(items: &mut [Item]) -> usize {
+    let cb = items
+        .iter()
+        .fold(Aabb::default(), |b, i| b.with_point(i.centroid));
+    let e = cb.extent();
+    let mut best: Option<(f64, usize, usize)> = None; // cost, axis, first bin of the right
+    for axis in 0..3 {
+        if !(e[axis] > 0.0) {
+            continue;
+        }
+        let bin = |i: &Item| {
+            (((i.centroid[axis] - cb.min[axis]) / e[axis] * BINS as f64) as usize).min(BINS - 1)
+        };
+        let mut count = [0f64; BINS];
+        let mut boxes = [Aabb::default(); BINS];
+        for i in items.iter() {
+            let b = bin(i);
+            count[b] += f64::from(i.triangles);
+            boxes[b] = boxes[b].union(i.bounds);
+        }
+        let mut right = [0f64; BINS];
+        let (mut rb, mut rn) = (Aabb::default(), 0.0);
+        for b in (1..BINS).rev() {
+            rb = rb.union(boxes[b]);
+            rn += count[b];
+            right[b] = rb.half_area() * rn;
+        }
+        let (mut lb, mut ln) = (Aabb::default(), 0.0);
+        for b in 1..BINS {
+            lb = lb.union(boxes[b - 1]);
+            ln += count[b - 1];
+            if ln == 0.0 || right[b] == 0.0 {
+                continue;
+            }
+            let cost = lb.half_area() * ln + right[b];
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, b));
+            }
+        }
     }
-    spread(x) | spread(y) << 1 | spread(z) << 2
+    if let Some((_, axis, b)) = best {
+        let bin = |i: &Item| {
+            (((i.centroid[axis] - cb.min[axis]) / e[axis] * BINS as f64) as usize).min(BINS - 1)
+        };
+        let mut left = 0;
+        for j in 0..items.len() {
+            if bin(&items[j]) < b {
+                items.swap(left, j);
+                left += 1;
+            }
+        }
+        if left > 0 && left < items.len() {
+            return left;
+        }
+    }
+    items.len() / 2
 }
 
 /// The frustum stage of every culling method: objects outside the view volume (the
@@ -206,13 +303,5 @@ mod tests {
         }
         assert!(seen.iter().all(|&n| n == 1));
         assert!(c.len() >= o.mesh.triangle_count() / (CLUSTER_TRIANGLES + 2));
-    }
-
-    #[test]
-    fn morton_interleaves() {
-        assert_eq!(morton3(1, 0, 0), 1);
-        assert_eq!(morton3(0, 1, 0), 2);
-        assert_eq!(morton3(0, 0, 1), 4);
-        assert_eq!(morton3(3, 0, 0), 9);
     }
 }

@@ -10,6 +10,7 @@ mod cells;
 mod cross_validation;
 mod cull;
 mod cull_buffer;
+mod cull_clusters;
 mod depth_sort;
 mod hsr_scenes;
 mod occluder_meshes;

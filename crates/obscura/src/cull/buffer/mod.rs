@@ -12,11 +12,16 @@
 //!    could reach), and its nearest depth key, rounded towards nearer. A box with a
 //!    corner at or in front of the near plane has neither and is never culled.
 //! 2. **Occluders**: units ranked by the area of their screen rectangle (a box that
-//!    crosses the near plane ranks first), taken in that order until
+//!    crosses the near plane ranks first), or nearest box first
+//!    ([`BufferOptions::occluder_order`]), taken in that order until
 //!    [`BufferOptions::occluder_triangles`] triangles; of each, the front-facing
 //!    polygons only (back faces may be culled by the view, so they are no proof of
 //!    occlusion), clipped to the near plane, cut into triangles in a fan (the
-//!    polygons are convex).
+//!    polygons are convex). A cluster lists its polygons largest first, so with
+//!    [`BufferOptions::occluder_min_area`] only those that can cover that many buffer
+//!    pixels are taken (a scene that is one big mesh has big walls and floors among
+//!    much small detail). They are drawn nearest unit first, each triangle tested
+//!    against the buffer before if [`BufferOptions::occluder_queries`].
 //! 3. **The buffer**: the triangles rasterized conservatively ([`raster`]): a pixel
 //!    counts covered only if every viewport sample it stands for lies inside the
 //!    triangle, and its key is the triangle's farthest over the tile (masked) or the
@@ -64,6 +69,17 @@ pub enum BufferKind {
     HierarchicalZ,
 }
 
+/// In which order units give their occluders (see [`BufferOptions::occluder_order`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum OccluderOrder {
+    /// The units of largest screen rectangle first.
+    #[default]
+    Largest,
+    /// The units of nearest box first.
+    Nearest,
+}
+
 /// Options of the occlusion buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[non_exhaustive]
@@ -83,6 +99,21 @@ pub struct BufferOptions {
     /// The occluder budget: triangles rasterized at most, taken from the units of
     /// largest screen area first.
     pub occluder_triangles: u32,
+    /// The order in which units give their occluders until the budget is spent.
+    pub occluder_order: OccluderOrder,
+    /// The smallest occluder triangle drawn, in buffer pixels of area: a unit's
+    /// polygons are taken largest first while their area, as seen from the unit's
+    /// nearest depth, reaches it, and a triangle that projects smaller is not drawn
+    /// (0: every front-facing polygon of a unit taken). A triangle of a few pixels
+    /// covers few whole tiles of the buffer and costs its set-up; in a scene that is
+    /// one big mesh, a cluster's box is large while most of its triangles are small.
+    pub occluder_min_area: u32,
+    /// Test each occluder triangle against the buffer before drawing it, and skip it
+    /// when the buffer is already nearer over its whole rectangle (it could make no
+    /// pixel nearer): less overdraw when near occluders come first. (Skipping
+    /// triangles hidden at most of their pixels was tried: the pixels left are often
+    /// the ones no other occluder covers, and fewer boxes were culled.)
+    pub occluder_queries: bool,
     /// The rasterizer's compiled variant (every one gives the same buffer).
     pub kernel: Kernel,
 }
@@ -95,6 +126,9 @@ impl Default for BufferOptions {
             max_width: 1024,
             keep_image: false,
             occluder_triangles: 1 << 12,
+            occluder_order: OccluderOrder::Largest,
+            occluder_min_area: 0,
+            occluder_queries: false,
             kernel: Kernel::Auto,
         }
     }
@@ -137,6 +171,10 @@ struct Unit {
     area: f64,
     /// The nearest key of its box (`+inf` when it crosses the near plane).
     key: f32,
+    /// The nearest eye-space depth of its box (0 when it crosses the near plane).
+    depth: f64,
+    /// How many of its polygons are drawn as occluders (clusters: the first ones).
+    take: u32,
 }
 
 /// The occlusion buffer and its scratch space, reused frame to frame (no allocation
@@ -227,6 +265,11 @@ impl OcclusionBuffer {
     /// rectangle outside the viewport, or a coordinate that is not finite.
     #[must_use]
     pub fn project_box(&self, t: &ViewTransform, b: &Aabb) -> Option<BoxRect> {
+        self.project_box_depth(t, b).map(|(r, _)| r)
+    }
+
+    /// [`Self::project_box`] and the nearest eye-space depth of the box.
+    fn project_box_depth(&self, t: &ViewTransform, b: &Aabb) -> Option<(BoxRect, f64)> {
         if b.is_empty() {
             return None;
         }
@@ -273,14 +316,17 @@ impl OcclusionBuffer {
         let key = f32_up(key + DEPTH_MARGIN * key.abs() + 1e-12);
         let d = self.divisor;
         let (bx0, by0, bx1, by1) = (i0 as u32 / d, j0 as u32 / d, i1 as u32 / d, j1 as u32 / d);
-        Some(BoxRect {
-            x0: bx0,
-            y0: by0,
-            x1: bx1.min(self.width - 1),
-            y1: by1.min(self.height - 1),
-            key,
-            area: f64::from(bx1 - bx0 + 1) * f64::from(by1 - by0 + 1),
-        })
+        Some((
+            BoxRect {
+                x0: bx0,
+                y0: by0,
+                x1: bx1.min(self.width - 1),
+                y1: by1.min(self.height - 1),
+                key,
+                area: f64::from(bx1 - bx0 + 1) * f64::from(by1 - by0 + 1),
+            },
+            dmin,
+        ))
     }
 
     /// The buffer as eye-space depths (see [`BufferImage`]).
@@ -340,52 +386,84 @@ impl OcclusionBuffer {
             if o.mesh.polygon_count() == 0 || c.objects[k].is_some() {
                 continue;
             }
-            let area = |b: &Aabb| {
-                self.project_box(t, b)
-                    .map_or((full, f32::INFINITY), |r| (r.area, r.key))
+            let unit = |b: &Aabb, cluster: usize| {
+                let (area, key, depth) = self
+                    .project_box_depth(t, b)
+                    .map_or((full, f32::INFINITY, 0.0), |(r, d)| (r.area, r.key, d));
+                Unit {
+                    object: k as u32,
+                    cluster: cluster as u32,
+                    area,
+                    key,
+                    depth,
+                    take: 0,
+                }
             };
             if options.clusters {
                 for cl in clusters.of_object(k) {
                     if c.clusters[cl].is_none() {
-                        let (a, key) = area(clusters.bounds(cl));
-                        units.push(Unit {
-                            object: k as u32,
-                            cluster: cl as u32,
-                            area: a,
-                            key,
-                        });
+                        units.push(unit(clusters.bounds(cl), cl));
                     }
                 }
             } else {
-                let (a, key) = area(&o.bounds);
-                units.push(Unit {
-                    object: k as u32,
-                    cluster: u32::MAX,
-                    area: a,
-                    key,
-                });
+                units.push(unit(&o.bounds, u32::MAX as usize));
             }
         }
-        units.sort_unstable_by(|a, b| b.area.total_cmp(&a.area));
+        match bo.occluder_order {
+            OccluderOrder::Largest => units.sort_unstable_by(|a, b| b.area.total_cmp(&a.area)),
+            OccluderOrder::Nearest => units.sort_unstable_by(|a, b| a.depth.total_cmp(&b.depth)),
+        }
         // Occluder triangles.
         self.tris.clear();
         let budget = bo.occluder_triangles as usize;
+        let min_area = f64::from(bo.occluder_min_area);
+        // Buffer pixels per world unit at eye depth 1 (perspective) or anywhere
+        // (orthographic).
+        let scale = t.projection.y_axis.y.abs() * 0.5 * t.height / f64::from(self.divisor);
         let mut used_units = 0usize;
         // The units within the budget, then drawn nearest first: a tile filled by
         // near occluders refuses the farther ones at once (MSOC draws front to back for
         // the same reason).
         let mut selected = 0usize;
         let mut triangles = 0usize;
-        for u in &units {
-            if triangles >= budget || u.area < 2.0 {
+        let mut at = 0usize;
+        while at < units.len() && triangles < budget {
+            let u = &mut units[at];
+            at += 1;
+            if bo.occluder_order == OccluderOrder::Largest && u.area < 2.0 {
                 break;
             }
-            selected += 1;
-            triangles += if u.cluster == u32::MAX {
-                scene.objects()[u.object as usize].mesh.triangle_count()
+            let o = &scene.objects()[u.object as usize];
+            let (take, tris) = if u.cluster == u32::MAX {
+                (o.mesh.polygon_count(), o.mesh.triangle_count())
+            } else if min_area > 0.0 {
+                // World area of the smallest polygon worth drawing from this unit.
+                let s = if t.orthographic {
+                    scale
+                } else {
+                    scale / u.depth.max(t.near.max(t.near_limit))
+                };
+                let least = min_area / (s * s);
+                let cl = u.cluster as usize;
+                let areas = clusters.areas(cl);
+                let take = areas.partition_point(|&a| f64::from(a) >= least);
+                let polys = &clusters.polygons(cl)[..take];
+                let tris = polys
+                    .iter()
+                    .map(|&p| o.mesh.polygon(p as usize).len() - 2)
+                    .sum();
+                (take, tris)
             } else {
-                clusters.triangles(u.cluster as usize) as usize
+                let cl = u.cluster as usize;
+                (clusters.polygons(cl).len(), clusters.triangles(cl) as usize)
             };
+            if take == 0 {
+                continue;
+            }
+            u.take = take as u32;
+            triangles += tris;
+            units.swap(selected, at - 1);
+            selected += 1;
         }
         units[..selected].sort_unstable_by(|a, b| b.key.total_cmp(&a.key));
         for u in &units[..selected] {
@@ -394,11 +472,11 @@ impl OcclusionBuffer {
             let mv = t.model_view(&o.transform);
             if u.cluster == u32::MAX {
                 for p in 0..o.mesh.polygon_count() as u32 {
-                    self.emit(t, &mv, o, p);
+                    self.emit(t, &mv, o, p, min_area);
                 }
             } else {
-                for &p in clusters.polygons(u.cluster as usize) {
-                    self.emit(t, &mv, o, p);
+                for &p in &clusters.polygons(u.cluster as usize)[..u.take as usize] {
+                    self.emit(t, &mv, o, p, min_area);
                 }
             }
         }
@@ -406,8 +484,43 @@ impl OcclusionBuffer {
         c.stage("buffer occluders", start);
         let s = Instant::now();
         let tris = std::mem::take(&mut self.tris);
-        self.draw(&tris, bo.kernel);
-        let drawn = tris.len();
+        let mut drawn = tris.len();
+        if bo.occluder_queries {
+            // Nearest units first: a triangle behind the buffer over its whole
+            // rectangle can make no pixel nearer; it is skipped (skipping an occluder
+            // never culls more).
+            drawn = 0;
+            let (w, h) = (self.width as f64 - 1.0, self.height as f64 - 1.0);
+            for tri in &tris {
+                let (mut x0, mut y0, mut x1, mut y1) = (tri[0][0], tri[0][1], tri[0][0], tri[0][1]);
+                let mut key = tri[0][2];
+                for v in &tri[1..] {
+                    x0 = x0.min(v[0]);
+                    y0 = y0.min(v[1]);
+                    x1 = x1.max(v[0]);
+                    y1 = y1.max(v[1]);
+                    key = key.max(v[2]);
+                }
+                let (x0, y0) = (x0.floor().max(0.0), y0.floor().max(0.0));
+                let (x1, y1) = (x1.ceil().min(w), y1.ceil().min(h));
+                if !(x0 <= x1 && y0 <= y1)
+                    || self.hidden(&BoxRect {
+                        x0: x0 as u32,
+                        y0: y0 as u32,
+                        x1: x1 as u32,
+                        y1: y1 as u32,
+                        key: f32_up(key),
+                        area: 0.0,
+                    })
+                {
+                    continue;
+                }
+                drawn += 1;
+                self.draw(std::slice::from_ref(tri), bo.kernel);
+            }
+        } else {
+            self.draw(&tris, bo.kernel);
+        }
         self.tris = tris;
         c.stage("buffer raster", s);
         // Tests: objects, then clusters of the objects kept.
@@ -447,7 +560,7 @@ impl OcclusionBuffer {
         }
         c.stage("buffer tests", s);
         c.notes.push(format!(
-            "occlusion buffer ({}, {}x{} pixels): {drawn} occluder triangles from {used_units} \
+            "occlusion buffer ({}, {}x{} pixels): {drawn} of {} occluder triangles from {used_units} \
              of {} units; {culled_objects} objects and {culled_clusters} clusters behind it",
             match bo.kind {
                 BufferKind::Masked => "masked",
@@ -455,6 +568,7 @@ impl OcclusionBuffer {
             },
             self.width,
             self.height,
+            self.tris.len(),
             self.units.len(),
         ));
         if bo.keep_image {
@@ -471,6 +585,7 @@ impl OcclusionBuffer {
         mv: &crate::view::ModelView,
         o: &crate::scene::Object,
         p: u32,
+        min_area: f64,
     ) {
         let pos = o.mesh.positions();
         self.eye.clear();
@@ -539,7 +654,12 @@ impl OcclusionBuffer {
         let mut prev = project(self.clipped[1]);
         for &e in &self.clipped[2..] {
             let v = project(e);
-            self.tris.push([v0, prev, v]);
+            let area = ((prev[0] - v0[0]) * (v[1] - v0[1]) - (prev[1] - v0[1]) * (v[0] - v0[0]))
+                .abs()
+                * 0.5;
+            if area >= min_area {
+                self.tris.push([v0, prev, v]);
+            }
             prev = v;
         }
     }
