@@ -137,7 +137,8 @@ fn an_occluder_mesh_culls_what_its_object_hides_and_the_picture_stays() {
         culled += usize::from(c.objects[1].is_some());
     }
     assert!(culled > 5, "{culled}");
-    // The other methods ignore it and keep the picture too.
+    // The buffer draws it in place of the sphere, the frustum ignores it: the picture
+    // stays too.
     for m in [CullMethod::Buffer, CullMethod::Frustum] {
         same_picture(&scene, &index, &front, &CullOptions::with_method(m));
     }

@@ -466,17 +466,32 @@ impl OcclusionBuffer {
             selected += 1;
         }
         units[..selected].sort_unstable_by(|a, b| b.key.total_cmp(&a.key));
+        // Objects whose occluder mesh stands for them in this view (drawn once, in
+        // place of every unit of the object).
+        let mut stood_for: Vec<u32> = Vec::new();
+        let world = t.model_view(&glam::DMat4::IDENTITY);
         for u in &units[..selected] {
             used_units += 1;
             let o = &scene.objects()[u.object as usize];
+            if let Some(occ) = o.occluder.as_deref()
+                && crate::scene::occluder::occluder_usable(o, t)
+            {
+                if !stood_for.contains(&u.object) {
+                    stood_for.push(u.object);
+                    for p in 0..occ.polygon_count() as u32 {
+                        self.emit(t, &world, occ, false, p, min_area);
+                    }
+                }
+                continue;
+            }
             let mv = t.model_view(&o.transform);
             if u.cluster == u32::MAX {
                 for p in 0..o.mesh.polygon_count() as u32 {
-                    self.emit(t, &mv, o, p, min_area);
+                    self.emit(t, &mv, &o.mesh, o.mirrored, p, min_area);
                 }
             } else {
                 for &p in &clusters.polygons(u.cluster as usize)[..u.take as usize] {
-                    self.emit(t, &mv, o, p, min_area);
+                    self.emit(t, &mv, &o.mesh, o.mirrored, p, min_area);
                 }
             }
         }
@@ -577,21 +592,23 @@ impl OcclusionBuffer {
         Ok(())
     }
 
-    /// Appends the triangles of polygon `p` of object `o` to the occluders, if it
-    /// faces the viewer: clipped to the near plane, projected to buffer coordinates.
+    /// Appends the triangles of polygon `p` of `mesh` (an object's, placed by `mv`, or
+    /// an occluder mesh, already in world space) to the occluders, if it faces the
+    /// viewer (`mirrored`: the placement flips orientation): clipped to the near
+    /// plane, projected to buffer coordinates.
     fn emit(
         &mut self,
         t: &ViewTransform,
         mv: &crate::view::ModelView,
-        o: &crate::scene::Object,
+        mesh: &crate::scene::Mesh,
+        mirrored: bool,
         p: u32,
         min_area: f64,
     ) {
-        let pos = o.mesh.positions();
+        let pos = mesh.positions();
         self.eye.clear();
         self.eye.extend(
-            o.mesh
-                .polygon(p as usize)
+            mesh.polygon(p as usize)
                 .iter()
                 .map(|&i| mv.apply(pos[i as usize])),
         );
@@ -612,7 +629,7 @@ impl OcclusionBuffer {
             centroid += a;
         }
         centroid /= n as f64;
-        if o.mirrored {
+        if mirrored {
             normal = -normal;
         }
         let front = if t.orthographic {
