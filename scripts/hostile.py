@@ -857,16 +857,70 @@ def class_culling(bin_, root, rng):
         common_checks(cls, case, r, names=("ok.toml",))
         if sha(os.path.join(d, "ok.toml")) != h:
             note(cls, "input-overwritten", case)
-            # A valid model: one closed room holding the box (two rooms would need the wall
-    # between them as geometry, or the shared plane is a leak).
-    ok = CELLS_OK[:CELLS_OK.index("[[cell]]\nname = \"east\"")]
-    write(os.path.join(d, "ok.toml"), ok.encode())
-    r = run(bin_, ["cull", "ok.toml", "--method", "all", "--size", "64x48"], d)
-    n += 1
-    if r.rc != 0:
-        note(cls, "valid-cells-refused", "ok.toml", r.err.strip()[:160])
+            write(os.path.join(d, "ok.toml"), ok.encode())
         if r.rc == 0:
             note(cls, "input-output-accepted", case)
+    # Quake portal files: malformed, lying, huge, NaN, outside the scene's folder.
+    r = run(bin_, ["export", "demo:level", "-o", "level.obj"], d)
+    n += 1
+    common_checks(cls, "export demo:level", r)
+    prts = {
+        "empty.prt": b"",
+        "magic.prt": b"PRT2\n2\n1\n",
+        "counts.prt": b"PRT1\n99999999999\n99999999999\n",
+        "short.prt": b"PRT1\n2\n1\n4 0 1 (0 0 0 ) (1 0 0 ) (1 1 0 )\n",
+        "nan.prt": b"PRT1\n2\n1\n3 0 1 (0 0 0 ) (nan 0 0 ) (1 1 0 )\n",
+        "huge.prt": b"PRT1\n2\n1\n3 0 1 (0 0 0 ) (1e300 0 0 ) (1 1e300 0 )\n",
+        "leaf.prt": b"PRT1\n2\n1\n3 0 7 (0 0 0 ) (1 0 0 ) (1 1 0 )\n",
+        "flat.prt": b"PRT1\n2\n1\n3 0 1 (0 0 0 ) (1 0 0 ) (2 0 0 )\n",
+        "binary.prt": bytes(rng.randrange(256) for _ in range(4000)),
+        "many.prt": b"PRT1\n2\n1\n5000 0 1 " + b"(0 0 0 ) " * 5000 + b"\n",
+    }
+    for name, data in prts.items():
+        write(os.path.join(d, name), data)
+        for args in (["render", "level.obj", "--prt", name, "--cull", "portals",
+                      "--size", "64x48", "-o", "o.png"],
+                     ["cull", "level.obj", "--prt", name, "--method", "all",
+                      "--size", "64x48"]):
+            r = run(bin_, args, d)
+            n += 1
+            common_checks(cls, f"prt {name}: {args[0]}", r, names=(name,))
+        write(os.path.join(d, f"prt-{name}.toml"),
+              f'prt = "{name}"\n\n[[object]]\nfile = "level.obj"\n'.encode())
+        r = run(bin_, ["cull", f"prt-{name}.toml", "--method", "portals", "--size", "64x48"], d)
+        n += 1
+        common_checks(cls, f"prt key {name}", r, names=(name, f"prt-{name}.toml"))
+    # Portal files and occluder meshes outside the scene's folder are refused.
+    sub = os.path.join(d, "sub")
+    os.makedirs(sub, exist_ok=True)
+    write(os.path.join(sub, "out.toml"), b'prt = "../empty.prt"\n')
+    write(os.path.join(sub, "occ-out.toml"),
+          b'[[object]]\nname = "box"\nprimitive = "box"\nsize = [1, 1, 1]\n'
+          b'occluder = "../level.obj"\n')
+    for name in ("out.toml", "occ-out.toml"):
+        r = run(bin_, ["cull", name, "--method", "all", "--size", "64x48"], sub)
+        n += 1
+        common_checks(cls, f"outside the folder: {name}", r, names=(name,))
+        if r.rc == 0:
+            note(cls, "read-outside-folder", name)
+    # Occluder meshes: outside their object, NaN, inverted, huge, a missing file.
+    occ = {
+        "box-out": 'occluder_box = [[-1, -1, -1], [1, 1, 1]]',
+        "box-nan": 'occluder_box = [[nan, 0, 0], [0.1, 0.1, 0.1]]',
+        "box-inverted": 'occluder_box = [[0.2, 0.2, 0.2], [-0.2, -0.2, -0.2]]',
+        "box-huge": 'occluder_box = [[-1e300, 0, 0], [0.1, 0.1, 0.1]]',
+        "missing": 'occluder = "nosuch.obj"',
+        "garbage": 'occluder = "binary.prt"',
+        "both": 'occluder = "level.obj"\noccluder_box = [[0, 0, 0], [0.1, 0.1, 0.1]]',
+    }
+    for name, key in occ.items():
+        text = ('[[object]]\nname = "box"\nprimitive = "box"\nsize = [1, 1, 1]\n'
+                + key + "\n")
+        write(os.path.join(d, f"occ-{name}.toml"), text.encode())
+        for method in ("occluders", "buffer"):
+            r = run(bin_, ["cull", f"occ-{name}.toml", "--method", method, "--size", "64x48"], d)
+            n += 1
+            common_checks(cls, f"occluder {name} {method}", r, names=(f"occ-{name}.toml", "box"))
     # Every demo, every method, small and odd sizes; export of each demo.
     for demo in ("default", "cube", "city", "blocks", "level", "level-grid", "cells5"):
         for size in ("1x1", "64x48", "3x2000"):
