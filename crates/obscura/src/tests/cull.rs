@@ -657,3 +657,35 @@ fn render_culled_is_the_plain_frame_with_the_decisions() {
         }
     }
 }
+
+/// Renders `camera` at 160x90 with and without culling by `options`; asserts the same
+/// ids and depths, and that no object with a visible face is culled. Returns the
+/// culling (for the tests of one method or one input that need no whole harness).
+pub(super) fn same_picture(
+    scene: &Scene,
+    index: &SceneIndex<'_>,
+    camera: &Camera,
+    options: &CullOptions,
+) -> Culling {
+    let vp = Viewport::new(160, 90).unwrap();
+    let opts = PrepareOptions::default();
+    let ro = RenderOptions::default();
+    let plain = View::new(scene, camera, vp, &opts).unwrap();
+    let (full, _) = index.render_view(&plain, Algorithm::ZBuffer, &ro).unwrap();
+    let culling = index.cull(camera, vp, options).unwrap();
+    for &id in &full.ids {
+        if id != BACKGROUND {
+            let (k, _) = scene.locate_face(id).unwrap();
+            assert!(
+                culling.objects[k].is_none(),
+                "visible object {k} culled from {}",
+                camera.eye
+            );
+        }
+    }
+    let culled = View::new_culled(scene, camera, vp, &opts, culling.clone()).unwrap();
+    let (f, _) = index.render_view(&culled, Algorithm::ZBuffer, &ro).unwrap();
+    assert_eq!(f.ids, full.ids, "ids from {}", camera.eye);
+    assert_eq!(f.depth, full.depth, "depth from {}", camera.eye);
+    culling
+}

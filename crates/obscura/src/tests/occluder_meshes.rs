@@ -6,14 +6,13 @@
 
 use glam::{DMat4, DVec3};
 
+use super::cull::same_picture;
 use crate::cull::occluders::select::OccluderCandidates;
-use crate::cull::occlusion::{CullMethod, CullOptions, CullReason, Culling};
+use crate::cull::occlusion::{CullMethod, CullOptions, CullReason};
 use crate::rng::SplitMix64;
 use crate::scene::demo::{box_mesh, uv_sphere_mesh};
-use crate::scene::{Camera, ObjectDesc, Scene, Viewport};
-use crate::surface::{Algorithm, RenderOptions};
-use crate::view::{PrepareOptions, View};
-use crate::{BACKGROUND, Error, SceneIndex};
+use crate::scene::{Camera, ObjectDesc, Scene};
+use crate::{Error, SceneIndex};
 
 /// The sphere's radius, and the half side of a cube well inside it.
 const R: f64 = 2.0;
@@ -39,36 +38,6 @@ fn statue(occluder: bool) -> Scene {
         .unwrap();
     }
     s
-}
-
-/// Renders with and without culling: the same ids and depths, no visible object culled.
-fn same_picture(
-    scene: &Scene,
-    index: &SceneIndex<'_>,
-    camera: &Camera,
-    options: &CullOptions,
-) -> Culling {
-    let vp = Viewport::new(160, 90).unwrap();
-    let opts = PrepareOptions::default();
-    let ro = RenderOptions::default();
-    let plain = View::new(scene, camera, vp, &opts).unwrap();
-    let (full, _) = index.render_view(&plain, Algorithm::ZBuffer, &ro).unwrap();
-    let culling = index.cull(camera, vp, options).unwrap();
-    for &id in &full.ids {
-        if id != BACKGROUND {
-            let (k, _) = scene.locate_face(id).unwrap();
-            assert!(
-                culling.objects[k].is_none(),
-                "visible object {k} culled from {}",
-                camera.eye
-            );
-        }
-    }
-    let culled = View::new_culled(scene, camera, vp, &opts, culling.clone()).unwrap();
-    let (f, _) = index.render_view(&culled, Algorithm::ZBuffer, &ro).unwrap();
-    assert_eq!(f.ids, full.ids, "ids from {}", camera.eye);
-    assert_eq!(f.depth, full.depth, "depth from {}", camera.eye);
-    culling
 }
 
 #[test]

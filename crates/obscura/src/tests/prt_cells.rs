@@ -11,6 +11,8 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use super::cull::same_picture;
+use crate::SceneIndex;
 use crate::cull::occlusion::{CullMethod, CullOptions, CullReason};
 use crate::cull::portals::floorplan::level_plan;
 use crate::cull::portals::prt::{
@@ -20,9 +22,6 @@ use crate::cull::portals::{CellGraph, CellIssueKind};
 use crate::geom::Plane;
 use crate::rng::SplitMix64;
 use crate::scene::{Camera, Scene, Viewport};
-use crate::surface::{Algorithm, RenderOptions};
-use crate::view::{PrepareOptions, View};
-use crate::{BACKGROUND, SceneIndex};
 
 fn inside(planes: &[Plane], p: DVec3, eps: f64) -> bool {
     planes.iter().all(|pl| pl.signed_distance(p) <= eps)
@@ -223,37 +222,6 @@ fn floor_plan_exported_to_prt1_locates_where_the_cells_do() {
         .filter(|i| matches!(i.kind, CellIssueKind::NoGeometry { .. }))
         .count();
     assert_eq!(no_geometry, flat_leaves(&g).len());
-}
-
-/// Renders `camera` with and without culling; asserts the same ids and depths, and
-/// that no visible object is culled. Returns the culling.
-fn same_picture(
-    scene: &Scene,
-    index: &SceneIndex<'_>,
-    camera: &Camera,
-    options: &CullOptions,
-) -> crate::cull::occlusion::Culling {
-    let vp = Viewport::new(160, 90).unwrap();
-    let opts = PrepareOptions::default();
-    let ro = RenderOptions::default();
-    let plain = View::new(scene, camera, vp, &opts).unwrap();
-    let (full, _) = index.render_view(&plain, Algorithm::ZBuffer, &ro).unwrap();
-    let culling = index.cull(camera, vp, options).unwrap();
-    for &id in &full.ids {
-        if id != BACKGROUND {
-            let (k, _) = scene.locate_face(id).unwrap();
-            assert!(
-                culling.objects[k].is_none(),
-                "visible object {k} culled from {}",
-                camera.eye
-            );
-        }
-    }
-    let culled = View::new_culled(scene, camera, vp, &opts, culling.clone()).unwrap();
-    let (f, _) = index.render_view(&culled, Algorithm::ZBuffer, &ro).unwrap();
-    assert_eq!(f.ids, full.ids, "ids from {}", camera.eye);
-    assert_eq!(f.depth, full.depth, "depth from {}", camera.eye);
-    culling
 }
 
 #[test]
