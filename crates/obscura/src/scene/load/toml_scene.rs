@@ -382,24 +382,7 @@ impl SceneReader<'_, '_> {
             ));
         }
         let span = prt.span();
-        let reference = format!(
-            "referenced from {}:{}",
-            self.path.display(),
-            self.line(&span)
-        );
-        let full = self
-            .sources
-            .resolve(
-                self.path,
-                &format!("line {}", self.line(&span)),
-                prt.get_ref(),
-                Syntax::Path,
-            )
-            .map_err(|e| match e {
-                Error::Format { message, .. } => self.error(&span, message),
-                e @ Error::Io { .. } => with_reference(e, &reference),
-                e => e,
-            })?;
+        let (full, reference) = self.resolve_reference(prt)?;
         let bytes = self
             .sources
             .read(&full)
@@ -746,6 +729,33 @@ impl SceneReader<'_, '_> {
         Ok(placed)
     }
 
+    /// The path a file reference (a string of the scene file) stands for, checked by
+    /// the scene's source rules (inside the scene's folder unless allowed), and the
+    /// "referenced from FILE:LINE" text its read errors carry. A refused reference is
+    /// an error at its line.
+    fn resolve_reference(&self, r: &Spanned<String>) -> Result<(PathBuf, String)> {
+        let span = r.span();
+        let reference = format!(
+            "referenced from {}:{}",
+            self.path.display(),
+            self.line(&span)
+        );
+        let full = self
+            .sources
+            .resolve(
+                self.path,
+                &format!("line {}", self.line(&span)),
+                r.get_ref(),
+                Syntax::Path,
+            )
+            .map_err(|e| match e {
+                Error::Format { message, .. } => self.error(&span, message),
+                e @ Error::Io { .. } => with_reference(e, &reference),
+                e => e,
+            })?;
+        Ok((full, reference))
+    }
+
     /// Loads (once) the mesh file a table references.
     fn mesh_file(&mut self, mesh: &Spanned<String>, scene: &mut Scene) -> Result<Arc<CachedFile>> {
         let span = mesh.span();
@@ -772,24 +782,7 @@ impl SceneReader<'_, '_> {
                 ));
             }
         }
-        let reference = format!(
-            "referenced from {}:{}",
-            self.path.display(),
-            self.line(&span)
-        );
-        let full = self
-            .sources
-            .resolve(
-                self.path,
-                &format!("line {}", self.line(&span)),
-                mesh.get_ref(),
-                Syntax::Path,
-            )
-            .map_err(|e| match e {
-                Error::Format { message, .. } => self.error(&span, message),
-                e @ Error::Io { .. } => with_reference(e, &reference),
-                e => e,
-            })?;
+        let (full, reference) = self.resolve_reference(mesh)?;
         let key = std::fs::canonicalize(&full).unwrap_or_else(|_| full.clone());
         if let Some(file) = self.cache.get(&key) {
             return Ok(file.clone());
