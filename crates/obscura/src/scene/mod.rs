@@ -179,6 +179,15 @@ impl Object {
             .collect()
     }
 
+    /// The world-space position of every vertex of the mesh, in mesh order (each
+    /// computed as [`Self::world_polygon`] computes it).
+    #[must_use]
+    pub fn world_positions(&self) -> Vec<DVec3> {
+        let mut out = Vec::with_capacity(self.mesh.positions().len());
+        self.world_positions_into(&mut out);
+        out
+    }
+
     /// Replaces `out` with the world-space position of every vertex of the mesh, in
     /// mesh order (each computed as [`Self::world_polygon`] computes it).
     pub(crate) fn world_positions_into(&self, out: &mut Vec<DVec3>) {

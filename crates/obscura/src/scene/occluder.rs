@@ -131,12 +131,7 @@ fn check_inside(o: &Object, occ: &Mesh) -> std::result::Result<(), String> {
         }
     }
     // World-space triangles of the object, counter-clockwise seen from outside.
-    let world: Vec<DVec3> = o
-        .mesh
-        .positions()
-        .iter()
-        .map(|&p| o.transform.transform_point3(p))
-        .collect();
+    let world = o.world_positions();
     let mut tris: Vec<[DVec3; 3]> = Vec::new();
     for p in 0..o.mesh.polygon_count() {
         let poly = o.mesh.polygon(p);

@@ -168,12 +168,7 @@ impl OccluderCandidates {
                     c.stands_for = Some(o.bounds);
                 }
             } else {
-                let world: Vec<DVec3> = o
-                    .mesh
-                    .positions()
-                    .iter()
-                    .map(|&p| o.transform.transform_point3(p))
-                    .collect();
+                let world = o.world_positions();
                 faces_of(&o.mesh, &world, o.mirrored, k as u32, Some(base), &mut all);
             }
             base += n as u32;

@@ -216,12 +216,7 @@ pub fn feature_edges(
             continue;
         }
         let adj = &adjacency[k];
-        let world: Vec<DVec3> = object
-            .mesh
-            .positions()
-            .iter()
-            .map(|&p| object.transform.transform_point3(p))
-            .collect();
+        let world = object.world_positions();
         let info = polygons_info(object, &world, facing);
         let global = |p: u32| view.polygon_base()[k] + p;
         let mesh = &object.mesh;
