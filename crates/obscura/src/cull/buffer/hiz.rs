@@ -66,17 +66,29 @@ impl HizBuffer {
     /// Draws convex polygons (buffer coordinates, see [`Poly`]), each as one primitive
     /// (inner coverage against all its edges, its one plane), and rebuilds the pyramid.
     pub fn draw_polygons(&mut self, polys: &[Poly], kernel: Kernel) {
+        self.draw_occluders(&[], polys, kernel);
+    }
+
+    /// Draws triangles and convex polygons, then rebuilds the pyramid once (the
+    /// rebuild costs as much as the raster of a few hundred occluders: draw both
+    /// kinds with this rather than one call each).
+    pub fn draw_occluders(&mut self, tris: &[Tri], polys: &[Poly], kernel: Kernel) {
         #[cfg(target_arch = "x86_64")]
         {
             if let Some(cpu) = kernel.avx2() {
-                // SAFETY: `Avx2::new` checked every feature `draw_polys_avx2` enables.
-                unsafe { draw_polys_avx2(cpu, self, polys) };
+                // SAFETY: `Avx2::new` checked every feature `draw_avx2` and
+                // `draw_polys_avx2` enable.
+                unsafe {
+                    draw_polys_avx2(cpu, self, polys);
+                    draw_avx2(cpu, self, tris);
+                }
                 self.build();
                 return;
             }
         }
         let _ = kernel;
         draw_polys_impl(self, polys);
+        draw_impl(self, tris);
         self.build();
     }
 
@@ -169,8 +181,13 @@ fn draw_impl(buf: &mut HizBuffer, tris: &[Tri]) {
 fn draw_polys_impl(buf: &mut HizBuffer, polys: &[Poly]) {
     let r = buf.r;
     let (w, h) = (buf.levels[0].0 as u32, buf.levels[0].1 as u32);
+    // Up to four edges with four (a triangle repeats one), the others with eight.
     for p in polys {
-        if let Some(s) = poly_setup::<POLY_MAX>(p, r, w, h) {
+        if p.vertices().len() <= 4 {
+            if let Some(s) = poly_setup::<4>(p, r, w, h) {
+                fill(buf, &s);
+            }
+        } else if let Some(s) = poly_setup::<POLY_MAX>(p, r, w, h) {
             fill(buf, &s);
         }
     }

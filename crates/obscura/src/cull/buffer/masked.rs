@@ -19,6 +19,12 @@
 //! 0`: 2 AVX-512 or 4 AVX2 vectors) and its depth bound; the AVX-512 kernel merges the
 //! tiles of a row (up to 16) in vector lanes. Every kernel runs the same `f32`
 //! operations, so they leave the same bits.
+//!
+//! A planar convex polygon ([`Poly`], up to eight vertices) is one primitive of the
+//! same raster with four or eight edge functions instead of three (a quad's two
+//! triangles would each leave out the pixels whose samples straddle the shared
+//! diagonal: inner coverage gives them to neither); triangles keep their own,
+//! three-edge build of the same code.
 
 use super::raster::{Poly, Setup, Tri, f32_down, poly_setup, setup};
 use crate::cpu::Kernel;
@@ -109,6 +115,13 @@ impl MaskedBuffer {
         }
         let _ = kernel;
         draw_impl(Portable, self, tris);
+    }
+
+    /// Draws convex polygons, then triangles (see [`MaskedBuffer::draw_polygons`] and
+    /// [`MaskedBuffer::draw`]): the same call as the occlusion buffer's other kind.
+    pub fn draw_occluders(&mut self, tris: &[Tri], polys: &[Poly], kernel: Kernel) {
+        self.draw_polygons(polys, kernel);
+        self.draw(tris, kernel);
     }
 
     /// Draws convex polygons (buffer coordinates, see [`Poly`]), each as one primitive,
@@ -451,6 +464,8 @@ impl Lanes for Portable {
         o
     }
     #[inline(always)]
+    // Pixel `p` of every edge's offsets: an index is clearer than `N` zipped iterators.
+    #[allow(clippy::needless_range_loop)]
     fn mask<const N: usize>(self, off: &[Self::Edge; N], e: [f32; N]) -> u32 {
         let mut m = 0u32;
         for p in 0..TW * TH {
@@ -488,6 +503,8 @@ impl Lanes for crate::cpu::Avx2 {
         }
     }
     #[inline(always)]
+    // Vector `q` of every edge's offsets (see the portable lanes).
+    #[allow(clippy::needless_range_loop)]
     fn mask<const N: usize>(self, off: &[Self::Edge; N], e: [f32; N]) -> u32 {
         use std::arch::x86_64::{
             _CMP_GT_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_cmp_ps, _mm256_movemask_ps,
