@@ -706,7 +706,7 @@ fn masked_raster_marks_only_pixels_inside_with_keys_never_nearer_exact_arithmeti
     let (mut covered, mut inside) = (0usize, 0usize);
     for case in 0..2500 {
         let r = [0.0, 0.5][case % 2];
-        let steps = r as i128 * 2 + 1; // samples per axis: 1 (r = 0) or 2 (r = 1/2)
+        let steps = (r * 2.0) as i128 + 1; // samples per axis: 1 (r = 0) or 2 (r = 1/2)
         let size = [0.7, 3.0, 10.0, 10.0, 40.0, 300.0][case % 6];
         let (cx, cy) = (
             rng.range(-5.0, f64::from(w) + 5.0),
@@ -895,7 +895,7 @@ fn polygon_raster_marks_only_pixels_inside_with_keys_never_nearer_exact_arithmet
     let (mut covered, mut inside, mut drawn) = (0usize, 0usize, 0usize);
     for case in 0..1200 {
         let r = [0.0, 0.5][case % 2];
-        let steps = r as i128 * 2 + 1;
+        let steps = (r * 2.0) as i128 + 1;
         let size = [0.9, 3.0, 10.0, 10.0, 40.0, 300.0][case % 6];
         let n = 3 + case % 6;
         let c = [
