@@ -9,7 +9,7 @@ use glam::{DMat4, DVec3};
 use crate::SceneIndex;
 use crate::cpu::{Avx2, Avx512, Kernel};
 use crate::cull::buffer::masked::{self, MaskedBuffer};
-use crate::cull::buffer::raster::Tri;
+use crate::cull::buffer::raster::{Poly, Tri};
 use crate::cull::buffer::{BufferKind, BufferOptions, OcclusionBuffer};
 use crate::cull::occlusion::{CullMethod, CullOptions, CullReason};
 use crate::frame::BACKGROUND;
@@ -706,7 +706,7 @@ fn masked_raster_marks_only_pixels_inside_with_keys_never_nearer_exact_arithmeti
     let (mut covered, mut inside) = (0usize, 0usize);
     for case in 0..2500 {
         let r = [0.0, 0.5][case % 2];
-        let steps = r as i128 * 2 + 1; // samples per axis: 1 (r = 0) or 2 (r = 1/2)
+        let steps = (r * 2.0) as i128 + 1; // samples per axis: 1 (r = 0) or 2 (r = 1/2)
         let size = [0.7, 3.0, 10.0, 10.0, 40.0, 300.0][case % 6];
         let (cx, cy) = (
             rng.range(-5.0, f64::from(w) + 5.0),
@@ -778,6 +778,395 @@ fn masked_raster_marks_only_pixels_inside_with_keys_never_nearer_exact_arithmeti
         covered * 100 >= inside * 97 && inside > 100_000,
         "{covered} pixels marked of {inside} inside"
     );
+}
+
+// ---------------------------------------------------------------------------------
+// Convex polygons as one primitive
+
+/// A random convex polygon of `n` vertices around `(cx, cy)` (radii up to `size`, the
+/// angles sorted), its keys on the plane `k0 + kx X + ky Y`, either orientation.
+fn random_poly(
+    rng: &mut SplitMix64,
+    n: usize,
+    c: [f64; 2],
+    size: f64,
+    k: [f64; 3],
+) -> Vec<[f64; 3]> {
+    let mut ang: Vec<f64> = (0..n)
+        .map(|_| rng.range(0.0, std::f64::consts::TAU))
+        .collect();
+    ang.sort_by(f64::total_cmp);
+    let (rx, ry) = (rng.range(0.2, 1.0) * size, rng.range(0.2, 1.0) * size);
+    let mut v: Vec<[f64; 3]> = ang
+        .iter()
+        .map(|a| {
+            let (x, y) = (c[0] + rx * a.cos(), c[1] + ry * a.sin());
+            [x, y, k[0] + k[1] * x + k[2] * y]
+        })
+        .collect();
+    if rng.next_f64() < 0.5 {
+        v.reverse();
+    }
+    v
+}
+
+/// Random polygons (all accepted by [`Poly::new`]) in a `w x h` buffer.
+fn random_polys(count: usize, seed: u64, w: f64, h: f64) -> Vec<Poly> {
+    let mut rng = SplitMix64(seed);
+    let mut out = Vec::new();
+    while out.len() < count {
+        let n = 3 + (rng.next_f64() * 6.0) as usize;
+        let c = [rng.range(-5.0, w + 5.0), rng.range(-5.0, h + 5.0)];
+        let size = if out.len() % 5 == 0 { 40.0 } else { 8.0 };
+        let k = [
+            rng.range(0.3, 0.7),
+            rng.range(-2e-3, 2e-3),
+            rng.range(-2e-3, 2e-3),
+        ];
+        if let Some(p) = Poly::new(&random_poly(&mut rng, n, c, size, k)) {
+            out.push(p);
+        }
+    }
+    out
+}
+
+#[test]
+fn polygon_rasterizers_leave_the_same_bits_in_every_kernel() {
+    if !Avx2::is_available() {
+        crate::cpu::simd_test_skipped("AVX2", "occlusion buffer polygon rasterizers");
+        return;
+    }
+    let mut kernels = vec![Kernel::Avx2];
+    if Avx512::is_available() {
+        kernels.push(Kernel::Avx512);
+    } else {
+        crate::cpu::simd_test_skipped("AVX-512", "masked buffer polygon rasterizer");
+    }
+    let (w, h) = (203u32, 117u32);
+    for seed in 0..4 {
+        let polys = random_polys(300, seed + 100, f64::from(w), f64::from(h));
+        assert!(polys.iter().any(|p| p.vertices().len() <= 4));
+        assert!(polys.iter().any(|p| p.vertices().len() > 4));
+        let r = [0.0, 0.5][seed as usize % 2];
+        let mut p = MaskedBuffer::default();
+        p.reset(w, h, r);
+        masked::draw_polys_portable(&mut p, &polys);
+        let (pm, p0, p1) = p.state();
+        assert!(pm.iter().any(|&m| m != 0) && p0.iter().any(|z| z.is_finite()));
+        for &kernel in &kernels {
+            let mut v = MaskedBuffer::default();
+            v.reset(w, h, r);
+            v.draw_polygons(&polys, kernel);
+            let (vm, v0, v1) = v.state();
+            assert_eq!(pm, vm, "{kernel:?}");
+            assert!(
+                p0.iter().zip(v0).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{kernel:?}"
+            );
+            assert!(
+                p1.iter().zip(v1).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{kernel:?}"
+            );
+        }
+        let mut hp = crate::cull::buffer::hiz::HizBuffer::default();
+        let mut hv = crate::cull::buffer::hiz::HizBuffer::default();
+        hp.reset(w, h, r);
+        hv.reset(w, h, r);
+        hp.draw_polygons(&polys, Kernel::Portable);
+        hv.draw_polygons(&polys, Kernel::Avx2);
+        assert!(hp.pixels().iter().any(|z| z.is_finite()));
+        assert!(
+            hp.pixels()
+                .iter()
+                .zip(hv.pixels())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+    }
+}
+
+#[test]
+fn polygon_raster_marks_only_pixels_inside_with_keys_never_nearer_exact_arithmetic() {
+    // One convex polygon at a time into an empty buffer (both kinds): a pixel with a
+    // bound is one the raster marked covered. Vertices on a grid of 1/256 pixel, keys
+    // on the plane (k0 + kx X + ky Y) / 2^20 with X, Y in 1/256 and integer k: every
+    // orientation and key below is an exact integer.
+    let (w, h) = (45u32, 29u32);
+    let mut rng = SplitMix64(2025);
+    let (mut covered, mut inside, mut drawn) = (0usize, 0usize, 0usize);
+    for case in 0..1200 {
+        let r = [0.0, 0.5][case % 2];
+        let steps = (r * 2.0) as i128 + 1;
+        let size = [0.9, 3.0, 10.0, 10.0, 40.0, 300.0][case % 6];
+        let n = 3 + case % 6;
+        let c = [
+            rng.range(-5.0, f64::from(w) + 5.0),
+            rng.range(-5.0, f64::from(h) + 5.0),
+        ];
+        let k = [
+            (rng.range(0.3, 0.7) * f64::from(1 << 20)).round() as i128,
+            (rng.range(-2.0, 2.0)).round() as i128,
+            (rng.range(-2.0, 2.0)).round() as i128,
+        ];
+        let vi: Vec<[i128; 3]> = random_poly(&mut rng, n, c, size, [0.0; 3])
+            .iter()
+            .map(|p| {
+                let (x, y) = (
+                    (p[0] * 256.0).round() as i128,
+                    (p[1] * 256.0).round() as i128,
+                );
+                [x, y, k[0] + k[1] * x + k[2] * y]
+            })
+            .collect();
+        let verts: Vec<[f64; 3]> = vi
+            .iter()
+            .map(|p| {
+                [
+                    p[0] as f64 / 256.0,
+                    p[1] as f64 / 256.0,
+                    p[2] as f64 / f64::from(1 << 20),
+                ]
+            })
+            .collect();
+        let Some(poly) = Poly::new(&verts) else {
+            continue;
+        };
+        drawn += 1;
+        let m = vi.len();
+        let orient = |a: [i128; 3], b: [i128; 3], p: [i128; 2]| {
+            (b[0] - a[0]) * (p[1] - a[1]) - (p[0] - a[0]) * (b[1] - a[1])
+        };
+        let area: i128 = (1..m - 1)
+            .map(|i| orient(vi[0], vi[i], [vi[i + 1][0], vi[i + 1][1]]))
+            .sum();
+        let sgn = area.signum();
+        for kind in [BufferKind::Masked, BufferKind::HierarchicalZ] {
+            let bound_of: Box<dyn Fn(u32, u32) -> f32> = match kind {
+                BufferKind::Masked => {
+                    let mut b = MaskedBuffer::default();
+                    b.reset(w, h, r);
+                    b.draw_polygons(&[poly], Kernel::Auto);
+                    Box::new(move |x, y| b.bound(x, y))
+                }
+                _ => {
+                    let mut b = crate::cull::buffer::hiz::HizBuffer::default();
+                    b.reset(w, h, r);
+                    b.draw_polygons(&[poly], Kernel::Auto);
+                    Box::new(move |x, y| b.bound(x, y))
+                }
+            };
+            for y in 0..h {
+                for x in 0..w {
+                    let bound = bound_of(x, y);
+                    let mut all_inside = true;
+                    for t in 0..steps {
+                        for s in 0..steps {
+                            let p = [i128::from(x) * 256 + s * 128, i128::from(y) * 256 + t * 128];
+                            let strictly =
+                                (0..m).all(|i| orient(vi[i], vi[(i + 1) % m], p) * sgn > 0);
+                            all_inside &= strictly;
+                            if bound == f32::NEG_INFINITY {
+                                continue;
+                            }
+                            assert!(
+                                strictly,
+                                "case {case} {kind:?}: pixel ({x}, {y}) marked, its sample {p:?}/256 is not inside {verts:?}"
+                            );
+                            let num = k[0] + k[1] * p[0] + k[2] * p[1];
+                            assert!(
+                                exactly_at_most(bound, num, 1 << 20),
+                                "case {case} {kind:?}: pixel ({x}, {y}) bound {bound} nearer than the key {} at {p:?}/256 of {verts:?}",
+                                num as f64 / f64::from(1 << 20)
+                            );
+                        }
+                    }
+                    if kind == BufferKind::Masked {
+                        inside += usize::from(all_inside);
+                        covered += usize::from(bound != f32::NEG_INFINITY);
+                    }
+                }
+            }
+        }
+    }
+    assert!(drawn > 900, "{drawn} polygons accepted");
+    assert!(
+        covered * 100 >= inside * 97 && inside > 50_000,
+        "{covered} pixels marked of {inside} inside"
+    );
+}
+
+#[test]
+fn a_square_as_one_polygon_leaves_no_gap_along_its_diagonal() {
+    // The square [-0.5, 15.5]^2 (buffer coordinates, r = 0: the sample of pixel (i, j)
+    // is (i, j)): every pixel 0..=15 has its sample inside. Its two triangles share
+    // the diagonal y = x, which passes through the samples (i, i): inner coverage gives
+    // them to neither.
+    let z = 0.5;
+    let sq = [
+        [-0.5, -0.5, z],
+        [15.5, -0.5, z],
+        [15.5, 15.5, z],
+        [-0.5, 15.5, z],
+    ];
+    let poly = Poly::new(&sq).expect("a square is convex and planar");
+    let tris: [Tri; 2] = [[sq[0], sq[1], sq[2]], [sq[0], sq[2], sq[3]]];
+    let (w, h) = (24u32, 20u32);
+    for kind in [BufferKind::Masked, BufferKind::HierarchicalZ] {
+        for kernel in [Kernel::Portable, Kernel::Auto] {
+            let (poly_bound, tri_bound, poly_hidden, tri_hidden): (Vec<f32>, Vec<f32>, bool, bool) =
+                if kind == BufferKind::Masked {
+                    let (mut a, mut b) = (MaskedBuffer::default(), MaskedBuffer::default());
+                    a.reset(w, h, 0.0);
+                    b.reset(w, h, 0.0);
+                    a.draw_polygons(&[poly], kernel);
+                    b.draw(&tris, kernel);
+                    (
+                        (0..w * h).map(|i| a.bound(i % w, i / w)).collect(),
+                        (0..w * h).map(|i| b.bound(i % w, i / w)).collect(),
+                        a.hidden(2, 2, 13, 13, 0.49),
+                        b.hidden(2, 2, 13, 13, 0.49),
+                    )
+                } else {
+                    let mut a = crate::cull::buffer::hiz::HizBuffer::default();
+                    let mut b = crate::cull::buffer::hiz::HizBuffer::default();
+                    a.reset(w, h, 0.0);
+                    b.reset(w, h, 0.0);
+                    a.draw_polygons(&[poly], kernel);
+                    b.draw(&tris, kernel);
+                    (
+                        (0..w * h).map(|i| a.bound(i % w, i / w)).collect(),
+                        (0..w * h).map(|i| b.bound(i % w, i / w)).collect(),
+                        a.hidden(2, 2, 13, 13, 0.49),
+                        b.hidden(2, 2, 13, 13, 0.49),
+                    )
+                };
+            for y in 0..h {
+                for x in 0..w {
+                    let i = (y * w + x) as usize;
+                    let (pb, tb) = (poly_bound[i], tri_bound[i]);
+                    if x <= 15 && y <= 15 {
+                        assert!(
+                            pb <= 0.5 && pb > 0.4999,
+                            "{kind:?} {kernel:?}: ({x}, {y}) polygon bound {pb}"
+                        );
+                        if x == y {
+                            assert_eq!(
+                                tb,
+                                f32::NEG_INFINITY,
+                                "{kind:?} {kernel:?}: ({x}, {x}) on the diagonal"
+                            );
+                        } else {
+                            assert!(tb <= 0.5, "{kind:?} {kernel:?}: ({x}, {y}) {tb}");
+                        }
+                    } else {
+                        assert_eq!(pb, f32::NEG_INFINITY, "{kind:?} {kernel:?}: ({x}, {y})");
+                        assert_eq!(tb, f32::NEG_INFINITY, "{kind:?} {kernel:?}: ({x}, {y})");
+                    }
+                }
+            }
+            // A box behind the square, across its diagonal: hidden only by the polygon.
+            assert!(poly_hidden, "{kind:?} {kernel:?}");
+            assert!(!tri_hidden, "{kind:?} {kernel:?}");
+        }
+    }
+}
+
+#[test]
+fn non_convex_non_planar_and_degenerate_polygons_are_refused() {
+    let z = 0.5;
+    let ok = [
+        [0.0, 0.0, z],
+        [10.0, 0.0, z],
+        [10.0, 10.0, z],
+        [0.0, 10.0, z],
+    ];
+    assert!(Poly::new(&ok).is_some());
+    // Clockwise, and with repeated vertices: still the square.
+    let mut cw = ok;
+    cw.reverse();
+    assert!(Poly::new(&cw).is_some());
+    let rep = [ok[0], ok[0], ok[1], ok[2], ok[2], ok[3], ok[0]];
+    assert_eq!(Poly::new(&rep).map(|p| p.vertices().len()), Some(4));
+    let refused: [(&str, Vec<[f64; 3]>); 9] = [
+        // A dart (one reflex vertex).
+        (
+            "dart",
+            vec![[0.0, 0.0, z], [10.0, 5.0, z], [0.0, 10.0, z], [3.0, 5.0, z]],
+        ),
+        // A bow tie (self-intersecting).
+        (
+            "bow tie",
+            vec![
+                [0.0, 0.0, z],
+                [10.0, 10.0, z],
+                [10.0, 0.0, z],
+                [0.0, 10.0, z],
+            ],
+        ),
+        // A pentagram (every turn the same way, wound twice).
+        (
+            "pentagram",
+            (0..5)
+                .map(|i| {
+                    let a = f64::from(i * 2) * std::f64::consts::TAU / 5.0;
+                    [10.0 * a.cos(), 10.0 * a.sin(), z]
+                })
+                .collect(),
+        ),
+        // A vertex on an edge (three collinear).
+        (
+            "collinear",
+            vec![
+                [0.0, 0.0, z],
+                [5.0, 0.0, z],
+                [10.0, 0.0, z],
+                [10.0, 10.0, z],
+            ],
+        ),
+        // Not planar: one key off the others' plane by far more than rounding.
+        (
+            "warped",
+            vec![
+                [0.0, 0.0, z],
+                [10.0, 0.0, z],
+                [10.0, 10.0, 0.6],
+                [0.0, 10.0, z],
+            ],
+        ),
+        (
+            "too few",
+            vec![[0.0, 0.0, z], [10.0, 0.0, z], [0.0, 0.0, z]],
+        ),
+        (
+            "too many",
+            (0..9)
+                .map(|i| {
+                    let a = f64::from(i) * std::f64::consts::TAU / 9.0;
+                    [10.0 * a.cos(), 10.0 * a.sin(), z]
+                })
+                .collect(),
+        ),
+        (
+            "not finite",
+            vec![[0.0, 0.0, z], [10.0, 0.0, f64::NAN], [0.0, 10.0, z]],
+        ),
+        // A sliver whose plane would be ill-conditioned.
+        (
+            "sliver",
+            vec![[0.0, 0.0, z], [1e4, 0.0, z], [1e4, 1e-6, z], [0.0, 1e-6, z]],
+        ),
+    ];
+    for (name, v) in &refused {
+        assert!(Poly::new(v).is_none(), "{name} accepted");
+    }
+    // Eight vertices on a circle: accepted, and planar keys on a tilted plane too.
+    let oct: Vec<[f64; 3]> = (0..8)
+        .map(|i| {
+            let a = f64::from(i) * std::f64::consts::TAU / 8.0;
+            let (x, y) = (20.0 + 10.0 * a.cos(), 20.0 + 10.0 * a.sin());
+            [x, y, 0.3 + 0.01 * x - 0.004 * y]
+        })
+        .collect();
+    assert!(Poly::new(&oct).is_some());
 }
 
 /// Hundreds of street views, both kinds (run by hand: `cargo test --release -p obscura

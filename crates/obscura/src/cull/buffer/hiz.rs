@@ -5,7 +5,7 @@
 //! children. A box is tested from the level where its rectangle spans two texels or
 //! fewer, descending only into texels its nearest key does not pass.
 
-use super::raster::{Tri, f32_down, setup};
+use super::raster::{POLY_MAX, Poly, Setup, Tri, f32_down, poly_setup, setup};
 use crate::cpu::Kernel;
 
 /// The pyramid (see the [module documentation](self)); reused frame to frame.
@@ -59,6 +59,35 @@ impl HizBuffer {
             }
         }
         let _ = kernel;
+        draw_impl(self, tris);
+        self.build();
+    }
+
+    /// Draws convex polygons (buffer coordinates, see [`Poly`]), each as one primitive
+    /// (inner coverage against all its edges, its one plane), and rebuilds the pyramid.
+    pub fn draw_polygons(&mut self, polys: &[Poly], kernel: Kernel) {
+        self.draw_occluders(&[], polys, kernel);
+    }
+
+    /// Draws triangles and convex polygons, then rebuilds the pyramid once (the
+    /// rebuild costs as much as the raster of a few hundred occluders: draw both
+    /// kinds with this rather than one call each).
+    pub fn draw_occluders(&mut self, tris: &[Tri], polys: &[Poly], kernel: Kernel) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(cpu) = kernel.avx2() {
+                // SAFETY: `Avx2::new` checked every feature `draw_avx2` and
+                // `draw_polys_avx2` enable.
+                unsafe {
+                    draw_polys_avx2(cpu, self, polys);
+                    draw_avx2(cpu, self, tris);
+                }
+                self.build();
+                return;
+            }
+        }
+        let _ = kernel;
+        draw_polys_impl(self, polys);
         draw_impl(self, tris);
         self.build();
     }
@@ -140,29 +169,59 @@ impl HizBuffer {
 #[inline(always)]
 fn draw_impl(buf: &mut HizBuffer, tris: &[Tri]) {
     let r = buf.r;
-    let (w, h, keys) = &mut buf.levels[0];
+    let (w, h) = (buf.levels[0].0 as u32, buf.levels[0].1 as u32);
     for t in tris {
-        let Some(s) = setup(t, r, *w as u32, *h as u32) else {
-            continue;
-        };
-        for y in s.y0..=s.y1 {
-            let yf = f64::from(y);
-            let e = [0, 1, 2].map(|k| s.b[k] * yf + s.c[k]);
-            let row = &mut keys[y as usize * *w..][..*w];
-            for x in s.x0..=s.x1 {
-                let xf = f64::from(x);
-                let inside = (0..3).all(|k| {
-                    let v = s.a[k] * xf + e[k];
-                    v - (v.abs() + s.a[k].abs() + s.b[k].abs()) * 1e-12 > 0.0
-                });
-                if inside {
-                    let z = f32_down(s.far_key(xf, yf, r, r));
-                    let cell = &mut row[x as usize];
-                    *cell = cell.max(z);
-                }
+        if let Some(s) = setup(t, r, w, h) {
+            fill(buf, &s);
+        }
+    }
+}
+
+#[inline(always)]
+fn draw_polys_impl(buf: &mut HizBuffer, polys: &[Poly]) {
+    let r = buf.r;
+    let (w, h) = (buf.levels[0].0 as u32, buf.levels[0].1 as u32);
+    // Up to four edges with four (a triangle repeats one), the others with eight.
+    for p in polys {
+        if p.vertices().len() <= 4 {
+            if let Some(s) = poly_setup::<4>(p, r, w, h) {
+                fill(buf, &s);
+            }
+        } else if let Some(s) = poly_setup::<POLY_MAX>(p, r, w, h) {
+            fill(buf, &s);
+        }
+    }
+}
+
+/// Level 0 takes the farthest key of `s` over each pixel whose samples it covers (every
+/// edge's value above its rounding bound).
+#[inline(always)]
+fn fill<const N: usize>(buf: &mut HizBuffer, s: &Setup<N>) {
+    let r = buf.r;
+    let (w, _, keys) = &mut buf.levels[0];
+    for y in s.y0..=s.y1 {
+        let yf = f64::from(y);
+        let e: [f64; N] = std::array::from_fn(|k| s.b[k] * yf + s.c[k]);
+        let row = &mut keys[y as usize * *w..][..*w];
+        for x in s.x0..=s.x1 {
+            let xf = f64::from(x);
+            let inside = (0..N).all(|k| {
+                let v = s.a[k] * xf + e[k];
+                v - (v.abs() + s.a[k].abs() + s.b[k].abs()) * 1e-12 > 0.0
+            });
+            if inside {
+                let z = f32_down(s.far_key(xf, yf, r, r));
+                let cell = &mut row[x as usize];
+                *cell = cell.max(z);
             }
         }
     }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn draw_polys_avx2(_: crate::cpu::Avx2, buf: &mut HizBuffer, polys: &[Poly]) {
+    draw_polys_impl(buf, polys);
 }
 
 #[cfg(target_arch = "x86_64")]

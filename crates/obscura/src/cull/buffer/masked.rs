@@ -19,8 +19,14 @@
 //! 0`: 2 AVX-512 or 4 AVX2 vectors) and its depth bound; the AVX-512 kernel merges the
 //! tiles of a row (up to 16) in vector lanes. Every kernel runs the same `f32`
 //! operations, so they leave the same bits.
+//!
+//! A planar convex polygon ([`Poly`], up to eight vertices) is one primitive of the
+//! same raster with four or eight edge functions instead of three (a quad's two
+//! triangles would each leave out the pixels whose samples straddle the shared
+//! diagonal: inner coverage gives them to neither); triangles keep their own,
+//! three-edge build of the same code.
 
-use super::raster::{Setup, Tri, f32_down, setup};
+use super::raster::{Poly, Setup, Tri, f32_down, poly_setup, setup};
 use crate::cpu::Kernel;
 
 /// A full tile mask.
@@ -109,6 +115,33 @@ impl MaskedBuffer {
         }
         let _ = kernel;
         draw_impl(Portable, self, tris);
+    }
+
+    /// Draws convex polygons, then triangles (see [`MaskedBuffer::draw_polygons`] and
+    /// [`MaskedBuffer::draw`]): the same call as the occlusion buffer's other kind.
+    pub fn draw_occluders(&mut self, tris: &[Tri], polys: &[Poly], kernel: Kernel) {
+        self.draw_polygons(polys, kernel);
+        self.draw(tris, kernel);
+    }
+
+    /// Draws convex polygons (buffer coordinates, see [`Poly`]), each as one primitive,
+    /// with the kernel asked for; every kernel leaves the same bits.
+    pub fn draw_polygons(&mut self, polys: &[Poly], kernel: Kernel) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(cpu) = kernel.avx512() {
+                // SAFETY: `Avx512::new` checked every feature `draw_polys_avx512` enables.
+                unsafe { draw_polys_avx512(cpu, self, polys) };
+                return;
+            }
+            if let Some(cpu) = kernel.avx2() {
+                // SAFETY: `Avx2::new` checked every feature `draw_polys_avx2` enables.
+                unsafe { draw_polys_avx2(cpu, self, polys) };
+                return;
+            }
+        }
+        let _ = kernel;
+        draw_polys_impl(Portable, self, polys);
     }
 
     /// The key bound of pixel `(x, y)`: no occluder covering it is farther;
@@ -203,25 +236,26 @@ impl MaskedBuffer {
     }
 }
 
-/// A triangle set up once for the tile loop: every value `f32`, the margins for the
-/// rounding of the loop folded into the constants (see [`tile_setup`]), so a tile costs
-/// its three edge values, one vector evaluation of 32 pixels per edge and one depth.
+/// A triangle (`N = 3`) or convex polygon (`N` edges) set up once for the tile loop:
+/// every value `f32`, the margins for the rounding of the loop folded into the
+/// constants (see [`tile_setup`]), so a tile costs its `N` edge values, one vector
+/// evaluation of 32 pixels per edge and one depth.
 #[derive(Clone, Copy, Debug)]
-struct TileSetup {
+struct TileSetup<const N: usize> {
     /// Tiles `tx0 ..= tx1`, `ty0 ..= ty1`.
     tx0: usize,
     ty0: usize,
     tx1: usize,
     ty1: usize,
     /// Per edge, its value at the first tile's corner pixel less the margin.
-    e: [f32; 3],
+    e: [f32; N],
     /// Per edge, its step from one tile to the next in x (`8 a`) and in y (`4 b`).
-    ex: [f32; 3],
-    ey: [f32; 3],
+    ex: [f32; N],
+    ey: [f32; N],
     /// Per edge, its slopes `a` and `b` in `f32`: the step from a tile's corner pixel
     /// to its pixel `(dx, dy)` is `a dx + b dy` ([`Lanes::offsets`]).
-    a: [f32; 3],
-    b: [f32; 3],
+    a: [f32; N],
+    b: [f32; N],
     /// The depth-key bound at the first tile (the plane's least over the tile, less the
     /// margins), its steps per tile, and the floor every bound may take (the farthest
     /// vertex's key less the slack).
@@ -240,8 +274,8 @@ const F32_LOOP: f64 = 1.0 / (1u64 << 19) as f64;
 /// `f64` (a few roundings of `2^-53` each: `2^-48` is a factor ten beyond).
 const F64_SETUP: f64 = 1.0 / (1u64 << 48) as f64;
 
-/// Sets up triangle `s` for the tile loop, or `None` when a value is not finite
-/// (leaving a triangle out is conservative).
+/// Sets up triangle or convex polygon `s` for the tile loop, or `None` when a value is
+/// not finite (leaving a triangle out is conservative).
 ///
 /// Why a pixel the loop marks covered is covered (every sample inside). Let `F(X, Y) =
 /// a X + b Y + c` be the set-up's edge function (exact reals: positive at a pixel's
@@ -265,20 +299,29 @@ const F64_SETUP: f64 = 1.0 / (1u64 << 48) as f64;
 /// plane is affine, so the least over tile `(i, j)` is the first tile's plus `8 p i + 4
 /// q j`. The floor `zmin` (the farthest vertex's key, no key of the triangle is
 /// farther) is rounded down too; so the bound never passes the triangle's key.
+///
+/// A convex polygon of `N` edges: its inner coverage is the intersection of its edges'
+/// inner half-planes (see [`Poly::new`]), each edge's function shifted by its own least
+/// over the sample square ([`poly_setup`]), so the argument above holds edge by edge,
+/// the margin `M` computed per edge from its own magnitudes: a pixel marked has every
+/// computed edge value above zero, hence every exact one, hence every sample inside the
+/// polygon. Its depth is one plane with the slack of [`poly_setup`] (which covers the
+/// vertices' distance from the plane) and the floor its farthest vertex key: the same
+/// argument holds word for word.
 #[inline(always)]
-fn tile_setup(s: &Setup, r: f64) -> Option<TileSetup> {
+fn tile_setup<const N: usize>(s: &Setup<N>, r: f64) -> Option<TileSetup<N>> {
     let (tx0, tx1) = (s.x0 as usize / TW, s.x1 as usize / TW);
     let (ty0, ty1) = (s.y0 as usize / TH, s.y1 as usize / TH);
     let (x0, y0) = ((tx0 * TW) as f64, (ty0 * TH) as f64);
     let w = ((tx1 - tx0 + 1) * TW) as f64;
     let h = ((ty1 - ty0 + 1) * TH) as f64;
-    let mut e = [0.0f32; 3];
-    let mut ex = [0.0f32; 3];
-    let mut ey = [0.0f32; 3];
-    let mut af = [0.0f32; 3];
-    let mut bf = [0.0f32; 3];
+    let mut e = [0.0f32; N];
+    let mut ex = [0.0f32; N];
+    let mut ey = [0.0f32; N];
+    let mut af = [0.0f32; N];
+    let mut bf = [0.0f32; N];
     let mut bounded = true;
-    for k in 0..3 {
+    for k in 0..N {
         let (a, b) = (s.a[k], s.b[k]);
         let g = a * x0 + b * y0 + s.c[k];
         let sum = g.abs() + a.abs() * w + b.abs() * h;
@@ -341,14 +384,14 @@ const DY: [f32; TW * TH] = {
 /// pixels at once) or AVX-512 (sixteen). All run the same `f32` operations (`e + off`,
 /// then `> 0`), so they give the same bits.
 trait Lanes: Copy {
-    /// The per-pixel offsets of the three edges, held the way the lanes want them.
-    type Offsets: Copy;
+    /// The per-pixel offsets of one edge, held the way the lanes want them.
+    type Edge: Copy;
     /// The offsets `a dx + b dy` (in this order of operations) of pixel `dy * 8 + dx`
     /// from its tile's corner pixel, per edge of slopes `a[k]`, `b[k]`.
-    fn offsets(self, a: [f32; 3], b: [f32; 3]) -> Self::Offsets;
-    /// The pixels of a tile inside all three edges whose values at the tile's corner
+    fn offsets<const N: usize>(self, a: [f32; N], b: [f32; N]) -> [Self::Edge; N];
+    /// The pixels of a tile inside all `N` edges whose values at the tile's corner
     /// pixel are `e`: bit `dy * 8 + dx` when every `e[k] + off[k][dy * 8 + dx] > 0`.
-    fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32;
+    fn mask<const N: usize>(self, off: &[Self::Edge; N], e: [f32; N]) -> u32;
 
     /// Draws `count` tiles `t + l` of one row: tile `l`'s edge values `e[k] + ex[k]
     /// (i0 + l)`, its depth bound `max(zrow + zx (i0 + l), zmin)` with `[zrow, zx, i0,
@@ -356,25 +399,35 @@ trait Lanes: Copy {
     /// This default merges tile by tile ([`MaskedBuffer::merge`]).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn row(
+    fn row<const N: usize>(
         self,
         buf: &mut MaskedBuffer,
-        off: &Self::Offsets,
+        off: &[Self::Edge; N],
         t: usize,
         count: usize,
-        e: [f32; 3],
-        ex: [f32; 3],
+        e: [f32; N],
+        ex: [f32; N],
         z: [f32; 4],
     ) {
         let [zrow, zx, i0, zmin] = z;
         let mut i = i0;
         for l in 0..count {
-            let m = self.mask(off, [e[0] + ex[0] * i, e[1] + ex[1] * i, e[2] + ex[2] * i]);
+            let m = self.mask(off, step(e, ex, i));
             let zt = max(zrow + zx * i, zmin);
             buf.merge(t + l, m, zt);
             i += 1.0;
         }
     }
+}
+
+/// `e[k] + ex[k] i` per edge (the edge values `i` steps along).
+#[inline(always)]
+fn step<const N: usize>(e: [f32; N], ex: [f32; N], i: f32) -> [f32; N] {
+    let mut v = e;
+    for k in 0..N {
+        v[k] = e[k] + ex[k] * i;
+    }
+    v
 }
 
 /// `a > b ? a : b`, the vector instructions' maximum (which picks `b` for equal
@@ -399,11 +452,11 @@ const ROW: usize = 16;
 struct Portable;
 
 impl Lanes for Portable {
-    type Offsets = [[f32; TW * TH]; 3];
+    type Edge = [f32; TW * TH];
     #[inline(always)]
-    fn offsets(self, a: [f32; 3], b: [f32; 3]) -> Self::Offsets {
-        let mut o = [[0.0f32; TW * TH]; 3];
-        for k in 0..3 {
+    fn offsets<const N: usize>(self, a: [f32; N], b: [f32; N]) -> [Self::Edge; N] {
+        let mut o = [[0.0f32; TW * TH]; N];
+        for k in 0..N {
             for p in 0..TW * TH {
                 o[k][p] = a[k] * DX[p] + b[k] * DY[p];
             }
@@ -411,10 +464,15 @@ impl Lanes for Portable {
         o
     }
     #[inline(always)]
-    fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32 {
+    // Pixel `p` of every edge's offsets: an index is clearer than `N` zipped iterators.
+    #[allow(clippy::needless_range_loop)]
+    fn mask<const N: usize>(self, off: &[Self::Edge; N], e: [f32; N]) -> u32 {
         let mut m = 0u32;
-        for (p, ((o0, o1), o2)) in off[0].iter().zip(&off[1]).zip(&off[2]).enumerate() {
-            let inside = (e[0] + o0 > 0.0) & (e[1] + o1 > 0.0) & (e[2] + o2 > 0.0);
+        for p in 0..TW * TH {
+            let mut inside = true;
+            for k in 0..N {
+                inside &= e[k] + off[k][p] > 0.0;
+            }
             m |= u32::from(inside) << p;
         }
         m
@@ -423,17 +481,17 @@ impl Lanes for Portable {
 
 #[cfg(target_arch = "x86_64")]
 impl Lanes for crate::cpu::Avx2 {
-    type Offsets = [[std::arch::x86_64::__m256; 4]; 3];
+    type Edge = [std::arch::x86_64::__m256; 4];
     #[inline(always)]
-    fn offsets(self, a: [f32; 3], b: [f32; 3]) -> Self::Offsets {
+    fn offsets<const N: usize>(self, a: [f32; N], b: [f32; N]) -> [Self::Edge; N] {
         use std::arch::x86_64::{
             _mm256_add_ps, _mm256_loadu_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps,
         };
         // SAFETY: a value of `Avx2` exists only on a processor with AVX2; each load
         // reads 8 of the 32 floats of `DX` or `DY`.
         unsafe {
-            let mut o = [[_mm256_setzero_ps(); 4]; 3];
-            for k in 0..3 {
+            let mut o = [[_mm256_setzero_ps(); 4]; N];
+            for k in 0..N {
                 let (av, bv) = (_mm256_set1_ps(a[k]), _mm256_set1_ps(b[k]));
                 for q in 0..4 {
                     let dx = _mm256_loadu_ps(DX[q * 8..].as_ptr());
@@ -445,7 +503,9 @@ impl Lanes for crate::cpu::Avx2 {
         }
     }
     #[inline(always)]
-    fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32 {
+    // Vector `q` of every edge's offsets (see the portable lanes).
+    #[allow(clippy::needless_range_loop)]
+    fn mask<const N: usize>(self, off: &[Self::Edge; N], e: [f32; N]) -> u32 {
         use std::arch::x86_64::{
             _CMP_GT_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_cmp_ps, _mm256_movemask_ps,
             _mm256_set1_ps, _mm256_setzero_ps,
@@ -454,17 +514,17 @@ impl Lanes for crate::cpu::Avx2 {
         // arithmetic intrinsics on registers.
         unsafe {
             let zero = _mm256_setzero_ps();
-            let ev = [
-                _mm256_set1_ps(e[0]),
-                _mm256_set1_ps(e[1]),
-                _mm256_set1_ps(e[2]),
-            ];
+            let mut ev = [zero; N];
+            for k in 0..N {
+                ev[k] = _mm256_set1_ps(e[k]);
+            }
             let mut m = 0u32;
-            for (q, ((&o0, &o1), &o2)) in off[0].iter().zip(&off[1]).zip(&off[2]).enumerate() {
-                let c0 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[0], o0), zero);
-                let c1 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[1], o1), zero);
-                let c2 = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[2], o2), zero);
-                let c = _mm256_and_ps(_mm256_and_ps(c0, c1), c2);
+            for q in 0..4 {
+                let mut c = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[0], off[0][q]), zero);
+                for k in 1..N {
+                    let ck = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_add_ps(ev[k], off[k][q]), zero);
+                    c = _mm256_and_ps(c, ck);
+                }
                 m |= (_mm256_movemask_ps(c) as u32) << (q * 8);
             }
             m
@@ -474,17 +534,17 @@ impl Lanes for crate::cpu::Avx2 {
 
 #[cfg(target_arch = "x86_64")]
 impl Lanes for crate::cpu::Avx512 {
-    type Offsets = [[std::arch::x86_64::__m512; 2]; 3];
+    type Edge = [std::arch::x86_64::__m512; 2];
     #[inline(always)]
-    fn offsets(self, a: [f32; 3], b: [f32; 3]) -> Self::Offsets {
+    fn offsets<const N: usize>(self, a: [f32; N], b: [f32; N]) -> [Self::Edge; N] {
         use std::arch::x86_64::{
             _mm512_add_ps, _mm512_loadu_ps, _mm512_mul_ps, _mm512_set1_ps, _mm512_setzero_ps,
         };
         // SAFETY: a value of `Avx512` exists only on a processor with AVX-512 F; each
         // load reads 16 of the 32 floats of `DX` or `DY`.
         unsafe {
-            let mut o = [[_mm512_setzero_ps(); 2]; 3];
-            for k in 0..3 {
+            let mut o = [[_mm512_setzero_ps(); 2]; N];
+            for k in 0..N {
                 let (av, bv) = (_mm512_set1_ps(a[k]), _mm512_set1_ps(b[k]));
                 for q in 0..2 {
                     let dx = _mm512_loadu_ps(DX[q * 16..].as_ptr());
@@ -496,7 +556,7 @@ impl Lanes for crate::cpu::Avx512 {
         }
     }
     #[inline(always)]
-    fn mask(self, off: &Self::Offsets, e: [f32; 3]) -> u32 {
+    fn mask<const N: usize>(self, off: &[Self::Edge; N], e: [f32; N]) -> u32 {
         use std::arch::x86_64::{
             _CMP_GT_OQ, _mm512_add_ps, _mm512_cmp_ps_mask, _mm512_mask_cmp_ps_mask, _mm512_set1_ps,
             _mm512_setzero_ps,
@@ -505,19 +565,21 @@ impl Lanes for crate::cpu::Avx512 {
         // these are arithmetic intrinsics on registers.
         unsafe {
             let zero = _mm512_setzero_ps();
-            let ev = [
-                _mm512_set1_ps(e[0]),
-                _mm512_set1_ps(e[1]),
-                _mm512_set1_ps(e[2]),
-            ];
+            let mut ev = [zero; N];
+            for k in 0..N {
+                ev[k] = _mm512_set1_ps(e[k]);
+            }
             let mut half = [0u32; 2];
             for (q, h) in half.iter_mut().enumerate() {
-                let k = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(_mm512_add_ps(ev[0], off[0][q]), zero);
-                let k =
-                    _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(k, _mm512_add_ps(ev[1], off[1][q]), zero);
-                let k =
-                    _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(k, _mm512_add_ps(ev[2], off[2][q]), zero);
-                *h = u32::from(k);
+                let mut m = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(_mm512_add_ps(ev[0], off[0][q]), zero);
+                for k in 1..N {
+                    m = _mm512_mask_cmp_ps_mask::<_CMP_GT_OQ>(
+                        m,
+                        _mm512_add_ps(ev[k], off[k][q]),
+                        zero,
+                    );
+                }
+                *h = u32::from(m);
             }
             half[0] | half[1] << 16
         }
@@ -525,14 +587,14 @@ impl Lanes for crate::cpu::Avx512 {
 
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn row(
+    fn row<const N: usize>(
         self,
         buf: &mut MaskedBuffer,
-        off: &Self::Offsets,
+        off: &[Self::Edge; N],
         t: usize,
         count: usize,
-        e: [f32; 3],
-        ex: [f32; 3],
+        e: [f32; N],
+        ex: [f32; N],
         z: [f32; 4],
     ) {
         use std::arch::x86_64::{_mm512_mask_set1_epi32, _mm512_setzero_si512 as zeros};
@@ -544,7 +606,7 @@ impl Lanes for crate::cpu::Avx512 {
         let mut m = unsafe { zeros() };
         let mut i = i0;
         for l in 0..count {
-            let bits = self.mask(off, [e[0] + ex[0] * i, e[1] + ex[1] * i, e[2] + ex[2] * i]);
+            let bits = self.mask(off, step(e, ex, i));
             // SAFETY: as above.
             m = unsafe { _mm512_mask_set1_epi32(m, 1 << l, bits as i32) };
             i += 1.0;
@@ -632,17 +694,13 @@ const LANE: [f32; ROW] = [
     0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0,
 ];
 
-/// Rasterizes one set-up triangle.
+/// Rasterizes one set-up triangle or polygon.
 #[inline(always)]
-fn draw_setup<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, s: &TileSetup) {
+fn draw_setup<L: Lanes, const N: usize>(lanes: L, buf: &mut MaskedBuffer, s: &TileSetup<N>) {
     let off = lanes.offsets(s.a, s.b);
     let mut j = 0.0f32;
     for ty in s.ty0..=s.ty1 {
-        let row = [
-            s.e[0] + s.ey[0] * j,
-            s.e[1] + s.ey[1] * j,
-            s.e[2] + s.ey[2] * j,
-        ];
+        let row = step(s.e, s.ey, j);
         let zrow = s.z + s.zy * j;
         let base = ty * buf.tiles_x + s.tx0;
         let n = s.tx1 - s.tx0 + 1;
@@ -675,6 +733,36 @@ fn draw_impl<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, tris: &[Tri]) {
     }
 }
 
+/// Polygons of up to four edges are drawn with four (a triangle repeats an edge), the
+/// others with [`super::raster::POLY_MAX`].
+#[inline(always)]
+fn draw_polys_impl<L: Lanes>(lanes: L, buf: &mut MaskedBuffer, polys: &[Poly]) {
+    let (w, h, r) = (buf.width, buf.height, buf.r);
+    for poly in polys {
+        if poly.vertices().len() <= 4 {
+            if let Some(s) = poly_setup::<4>(poly, r, w, h).and_then(|s| tile_setup(&s, r)) {
+                draw_setup(lanes, buf, &s);
+            }
+        } else if let Some(s) =
+            poly_setup::<{ super::raster::POLY_MAX }>(poly, r, w, h).and_then(|s| tile_setup(&s, r))
+        {
+            draw_setup(lanes, buf, &s);
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn draw_polys_avx2(cpu: crate::cpu::Avx2, buf: &mut MaskedBuffer, polys: &[Poly]) {
+    draw_polys_impl(cpu, buf, polys);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512vl,avx512bw,avx512dq,popcnt,bmi1,bmi2,lzcnt")]
+fn draw_polys_avx512(cpu: crate::cpu::Avx512, buf: &mut MaskedBuffer, polys: &[Poly]) {
+    draw_polys_impl(cpu, buf, polys);
+}
+
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 fn draw_avx2(cpu: crate::cpu::Avx2, buf: &mut MaskedBuffer, tris: &[Tri]) {
@@ -691,6 +779,12 @@ fn draw_avx512(cpu: crate::cpu::Avx512, buf: &mut MaskedBuffer, tris: &[Tri]) {
 #[cfg(test)]
 pub(crate) fn draw_portable(buf: &mut MaskedBuffer, tris: &[Tri]) {
     draw_impl(Portable, buf, tris);
+}
+
+/// The portable build of the polygon drawing (for the tests that compare kernels).
+#[cfg(test)]
+pub(crate) fn draw_polys_portable(buf: &mut MaskedBuffer, polys: &[Poly]) {
+    draw_polys_impl(Portable, buf, polys);
 }
 
 #[cfg(test)]
