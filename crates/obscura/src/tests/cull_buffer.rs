@@ -1169,6 +1169,65 @@ fn non_convex_non_planar_and_degenerate_polygons_are_refused() {
     assert!(Poly::new(&oct).is_some());
 }
 
+#[test]
+fn occlusion_buffer_draws_screen_polygons_and_refuses_bad_ones() {
+    // A square of viewport pixels [0, 32]^2 (samples 0.5 .. 31.5 inside) with divisor
+    // 2: buffer pixels 0..=15 have all their samples inside; a box rectangle across
+    // the diagonal, behind, is hidden (it is not with the square's two triangles).
+    let z = 0.5;
+    let sq = [
+        [0.0, 0.0, z],
+        [32.0, 0.0, z],
+        [32.0, 32.0, z],
+        [0.0, 32.0, z],
+    ];
+    let rect = crate::cull::buffer::BoxRect {
+        x0: 1,
+        y0: 1,
+        x1: 14,
+        y1: 14,
+        key: 0.49,
+        area: 0.0,
+    };
+    for kind in [BufferKind::Masked, BufferKind::HierarchicalZ] {
+        let mut buf = OcclusionBuffer::new();
+        buf.reset(kind, 2, 48, 40);
+        buf.draw_screen_polygons(&[&sq], Kernel::Auto).unwrap();
+        assert!(buf.hidden(&rect), "{kind:?}");
+        for y in 0..20 {
+            for x in 0..24 {
+                let b = buf.bound(x, y);
+                if x <= 15 && y <= 15 {
+                    assert!(b <= 0.5 && b > 0.4999, "{kind:?} ({x}, {y}) {b}");
+                } else {
+                    assert_eq!(b, f32::NEG_INFINITY, "{kind:?} ({x}, {y})");
+                }
+            }
+        }
+        let mut tri = OcclusionBuffer::new();
+        tri.reset(kind, 2, 48, 40);
+        tri.draw_screen_triangles(
+            &[[sq[0], sq[1], sq[2]], [sq[0], sq[2], sq[3]]],
+            Kernel::Auto,
+        );
+        assert!(!tri.hidden(&rect), "{kind:?}");
+        // A dart among good polygons: an error naming it, nothing drawn.
+        let dart = [
+            [0.0, 0.0, z],
+            [20.0, 10.0, z],
+            [0.0, 20.0, z],
+            [6.0, 10.0, z],
+        ];
+        let mut bad = OcclusionBuffer::new();
+        bad.reset(kind, 1, 48, 40);
+        let err = bad
+            .draw_screen_polygons(&[&sq, &dart], Kernel::Auto)
+            .unwrap_err();
+        assert!(err.to_string().contains("polygon 1"), "{err}");
+        assert!((0..40).all(|y| (0..48).all(|x| bad.bound(x, y) == f32::NEG_INFINITY)));
+    }
+}
+
 /// Hundreds of street views, both kinds (run by hand: `cargo test --release -p obscura
 /// --lib cull_buffer -- --ignored --nocapture`).
 #[test]

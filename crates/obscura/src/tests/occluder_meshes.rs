@@ -111,6 +111,22 @@ fn an_occluder_mesh_culls_what_its_object_hides_and_the_picture_stays() {
     for m in [CullMethod::Buffer, CullMethod::Frustum] {
         same_picture(&scene, &index, &front, &CullOptions::with_method(m));
     }
+    // The buffer draws the cube's faces as whole quads (no gap along a diagonal): the
+    // box behind is hidden by the cube alone, as the sphere's own 162 triangles hid it.
+    let c = same_picture(
+        &scene,
+        &index,
+        &front,
+        &CullOptions::with_method(CullMethod::Buffer),
+    );
+    assert_eq!(c.objects[1], Some(CullReason::Buffer), "{:?}", c.notes);
+    assert!(
+        c.notes
+            .iter()
+            .any(|n| n.contains("occluder polygons") && n.contains(" 0 of 0 triangles")),
+        "the cube's faces drawn as polygons, none of the sphere's triangles: {:?}",
+        c.notes
+    );
 }
 
 #[test]

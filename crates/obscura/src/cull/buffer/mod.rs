@@ -56,7 +56,7 @@ use crate::cpu::Kernel;
 use crate::geom::Aabb;
 use crate::index::SceneIndex;
 use crate::view::ViewTransform;
-use raster::{DEPTH_MARGIN, Tri, f32_up};
+use raster::{DEPTH_MARGIN, POLY_MAX, Poly, Tri, f32_up};
 
 /// Which occlusion buffer.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -188,6 +188,7 @@ pub struct OcclusionBuffer {
     width: u32,
     height: u32,
     tris: Vec<Tri>,
+    polys: Vec<Poly>,
     units: Vec<Unit>,
     eye: Vec<DVec3>,
     clipped: Vec<DVec3>,
@@ -238,6 +239,40 @@ impl OcclusionBuffer {
         match self.kind {
             BufferKind::Masked => self.masked.draw(tris, kernel),
             BufferKind::HierarchicalZ => self.hiz.draw(tris, kernel),
+        }
+    }
+
+    /// Rasterizes planar convex polygons given in viewport pixels (`[x, y, key]` per
+    /// vertex, as [`OcclusionBuffer::draw_screen_triangles`]), each as one primitive
+    /// (no pixel lost along an inner diagonal). An error naming the first polygon
+    /// that is not planar and strictly convex, or has more than eight vertices (see
+    /// [`Poly::new`]); nothing is drawn then: split such a polygon into triangles.
+    pub fn draw_screen_polygons(&mut self, polys: &[&[[f64; 3]]], kernel: Kernel) -> Result<()> {
+        let d = f64::from(self.divisor);
+        self.polys.clear();
+        for (k, v) in polys.iter().enumerate() {
+            let b: Vec<[f64; 3]> = v
+                .iter()
+                .map(|&[x, y, z]| [(x - 0.5) / d, (y - 0.5) / d, z])
+                .collect();
+            let Some(p) = Poly::new(&b) else {
+                return Err(crate::Error::option(
+                    format!("polygon {k}"),
+                    "not a planar strictly convex polygon of 3 to 8 vertices",
+                ));
+            };
+            self.polys.push(p);
+        }
+        let polys = std::mem::take(&mut self.polys);
+        self.draw_occluders(&[], &polys, kernel);
+        self.polys = polys;
+        Ok(())
+    }
+
+    fn draw_occluders(&mut self, tris: &[Tri], polys: &[Poly], kernel: Kernel) {
+        match self.kind {
+            BufferKind::Masked => self.masked.draw_occluders(tris, polys, kernel),
+            BufferKind::HierarchicalZ => self.hiz.draw_occluders(tris, polys, kernel),
         }
     }
 
@@ -413,8 +448,9 @@ impl OcclusionBuffer {
             OccluderOrder::Largest => units.sort_unstable_by(|a, b| b.area.total_cmp(&a.area)),
             OccluderOrder::Nearest => units.sort_unstable_by(|a, b| a.depth.total_cmp(&b.depth)),
         }
-        // Occluder triangles.
+        // Occluder triangles and convex polygons.
         self.tris.clear();
+        self.polys.clear();
         let budget = bo.occluder_triangles as usize;
         let min_area = f64::from(bo.occluder_min_area);
         // Buffer pixels per world unit at eye depth 1 (perspective) or anywhere
@@ -498,45 +534,32 @@ impl OcclusionBuffer {
         self.units = units;
         c.stage("buffer occluders", start);
         let s = Instant::now();
-        let tris = std::mem::take(&mut self.tris);
-        let mut drawn = tris.len();
+        let (tris, polys) = (
+            std::mem::take(&mut self.tris),
+            std::mem::take(&mut self.polys),
+        );
+        let (mut drawn, mut drawn_polys) = (tris.len(), polys.len());
         if bo.occluder_queries {
-            // Nearest units first: a triangle behind the buffer over its whole
+            // Nearest units first: an occluder behind the buffer over its whole
             // rectangle can make no pixel nearer; it is skipped (skipping an occluder
             // never culls more).
-            drawn = 0;
-            let (w, h) = (self.width as f64 - 1.0, self.height as f64 - 1.0);
+            (drawn, drawn_polys) = (0, 0);
             for tri in &tris {
-                let (mut x0, mut y0, mut x1, mut y1) = (tri[0][0], tri[0][1], tri[0][0], tri[0][1]);
-                let mut key = tri[0][2];
-                for v in &tri[1..] {
-                    x0 = x0.min(v[0]);
-                    y0 = y0.min(v[1]);
-                    x1 = x1.max(v[0]);
-                    y1 = y1.max(v[1]);
-                    key = key.max(v[2]);
+                if !self.occluder_hidden(tri) {
+                    drawn += 1;
+                    self.draw_occluders(std::slice::from_ref(tri), &[], bo.kernel);
                 }
-                let (x0, y0) = (x0.floor().max(0.0), y0.floor().max(0.0));
-                let (x1, y1) = (x1.ceil().min(w), y1.ceil().min(h));
-                if !(x0 <= x1 && y0 <= y1)
-                    || self.hidden(&BoxRect {
-                        x0: x0 as u32,
-                        y0: y0 as u32,
-                        x1: x1 as u32,
-                        y1: y1 as u32,
-                        key: f32_up(key),
-                        area: 0.0,
-                    })
-                {
-                    continue;
+            }
+            for poly in &polys {
+                if !self.occluder_hidden(poly.vertices()) {
+                    drawn_polys += 1;
+                    self.draw_occluders(&[], std::slice::from_ref(poly), bo.kernel);
                 }
-                drawn += 1;
-                self.draw(std::slice::from_ref(tri), bo.kernel);
             }
         } else {
-            self.draw(&tris, bo.kernel);
+            self.draw_occluders(&tris, &polys, bo.kernel);
         }
-        self.tris = tris;
+        (self.tris, self.polys) = (tris, polys);
         c.stage("buffer raster", s);
         // Tests: objects, then clusters of the objects kept.
         let s = Instant::now();
@@ -575,14 +598,16 @@ impl OcclusionBuffer {
         }
         c.stage("buffer tests", s);
         c.notes.push(format!(
-            "occlusion buffer ({}, {}x{} pixels): {drawn} of {} occluder triangles from {used_units} \
-             of {} units; {culled_objects} objects and {culled_clusters} clusters behind it",
+            "occlusion buffer ({}, {}x{} pixels): {drawn_polys} of {} occluder polygons and \
+             {drawn} of {} triangles from {used_units} of {} units; {culled_objects} objects \
+             and {culled_clusters} clusters behind it",
             match bo.kind {
                 BufferKind::Masked => "masked",
                 BufferKind::HierarchicalZ => "hierarchical z",
             },
             self.width,
             self.height,
+            self.polys.len(),
             self.tris.len(),
             self.units.len(),
         ));
@@ -592,10 +617,38 @@ impl OcclusionBuffer {
         Ok(())
     }
 
-    /// Appends the triangles of polygon `p` of `mesh` (an object's, placed by `mv`, or
-    /// an occluder mesh, already in world space) to the occluders, if it faces the
-    /// viewer (`mirrored`: the placement flips orientation): clipped to the near
-    /// plane, projected to buffer coordinates.
+    /// Whether the buffer already hides the whole screen rectangle of an occluder
+    /// (vertices in buffer coordinates) at its nearest key: drawing it could make no
+    /// pixel nearer.
+    fn occluder_hidden(&self, v: &[[f64; 3]]) -> bool {
+        let (w, h) = (self.width as f64 - 1.0, self.height as f64 - 1.0);
+        let (mut x0, mut y0, mut x1, mut y1) = (v[0][0], v[0][1], v[0][0], v[0][1]);
+        let mut key = v[0][2];
+        for p in &v[1..] {
+            x0 = x0.min(p[0]);
+            y0 = y0.min(p[1]);
+            x1 = x1.max(p[0]);
+            y1 = y1.max(p[1]);
+            key = key.max(p[2]);
+        }
+        let (x0, y0) = (x0.floor().max(0.0), y0.floor().max(0.0));
+        let (x1, y1) = (x1.ceil().min(w), y1.ceil().min(h));
+        !(x0 <= x1 && y0 <= y1)
+            || self.hidden(&BoxRect {
+                x0: x0 as u32,
+                y0: y0 as u32,
+                x1: x1 as u32,
+                y1: y1 as u32,
+                key: f32_up(key),
+                area: 0.0,
+            })
+    }
+
+    /// Appends polygon `p` of `mesh` (an object's, placed by `mv`, or an occluder
+    /// mesh, already in world space) to the occluders, if it faces the viewer
+    /// (`mirrored`: the placement flips orientation): clipped to the near plane,
+    /// projected to buffer coordinates; as one convex polygon when [`Poly::new`]
+    /// accepts it, else as triangles.
     fn emit(
         &mut self,
         t: &ViewTransform,
@@ -667,6 +720,28 @@ impl OcclusionBuffer {
             let y = (1.0 - clip.y / clip.w) * 0.5 * t.height;
             [(x - 0.5) / d, (y - 0.5) / d, t.zq_of_depth(-e.z)]
         };
+        if (4..=POLY_MAX).contains(&self.clipped.len()) {
+            let mut v = [[0.0; 3]; POLY_MAX];
+            for (slot, &e) in v.iter_mut().zip(&self.clipped) {
+                *slot = project(e);
+            }
+            let v = &v[..self.clipped.len()];
+            if let Some(poly) = Poly::new(v) {
+                // The smallest worth drawing, by the shoelace area (as a triangle's).
+                let area = (0..v.len())
+                    .map(|i| {
+                        let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                        a[0] * b[1] - a[1] * b[0]
+                    })
+                    .sum::<f64>()
+                    .abs()
+                    * 0.5;
+                if area >= min_area {
+                    self.polys.push(poly);
+                }
+                return;
+            }
+        }
         let v0 = project(self.clipped[0]);
         let mut prev = project(self.clipped[1]);
         for &e in &self.clipped[2..] {
