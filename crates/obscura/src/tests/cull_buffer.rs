@@ -628,6 +628,42 @@ fn masked_merge_keeps_both_layers_as_bounds() {
     assert!(!b.hidden(0, 0, 7, 3, 0.31));
 }
 
+/// Draws the same occluders into a `w x h` buffer of sample side `r` with the portable
+/// masked kernel and each vector kernel of `kernels`, and into two hierarchical-z
+/// buffers (portable and AVX2): asserts that something was drawn and that every
+/// kernel left the same bits.
+fn same_bits_in_every_kernel(
+    (w, h, r): (u32, u32, f64),
+    kernels: &[Kernel],
+    portable: impl Fn(&mut MaskedBuffer),
+    vector: impl Fn(&mut MaskedBuffer, Kernel),
+    hiz: impl Fn(&mut crate::cull::buffer::hiz::HizBuffer, Kernel),
+) {
+    let same = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(a, b)| a.to_bits() == b.to_bits());
+    let mut p = MaskedBuffer::default();
+    p.reset(w, h, r);
+    portable(&mut p);
+    let (pm, p0, p1) = p.state();
+    assert!(pm.iter().any(|&m| m != 0) && p0.iter().any(|z| z.is_finite()));
+    for &kernel in kernels {
+        let mut v = MaskedBuffer::default();
+        v.reset(w, h, r);
+        vector(&mut v, kernel);
+        let (vm, v0, v1) = v.state();
+        assert_eq!(pm, vm, "{kernel:?}");
+        assert!(same(&p0, &v0), "{kernel:?}");
+        assert!(same(&p1, &v1), "{kernel:?}");
+    }
+    let mut hp = crate::cull::buffer::hiz::HizBuffer::default();
+    let mut hv = crate::cull::buffer::hiz::HizBuffer::default();
+    hp.reset(w, h, r);
+    hv.reset(w, h, r);
+    hiz(&mut hp, Kernel::Portable);
+    hiz(&mut hv, Kernel::Avx2);
+    assert!(hp.pixels().iter().any(|z| z.is_finite()));
+    assert!(same(hp.pixels(), hv.pixels()));
+}
+
 #[test]
 fn vector_and_portable_rasterizers_leave_the_same_bits() {
     if !Avx2::is_available() {
@@ -644,37 +680,12 @@ fn vector_and_portable_rasterizers_leave_the_same_bits() {
     for seed in 0..4 {
         let tris = random_tris(300, seed, f64::from(w), f64::from(h));
         let r = [0.0, 0.5][seed as usize % 2];
-        let mut p = MaskedBuffer::default();
-        p.reset(w, h, r);
-        masked::draw_portable(&mut p, &tris);
-        let (pm, p0, p1) = p.state();
-        assert!(pm.iter().any(|&m| m != 0) || p0.iter().any(|z| z.is_finite()));
-        for &kernel in &kernels {
-            let mut v = MaskedBuffer::default();
-            v.reset(w, h, r);
-            v.draw(&tris, kernel);
-            let (vm, v0, v1) = v.state();
-            assert_eq!(pm, vm, "{kernel:?}");
-            assert!(
-                p0.iter().zip(v0).all(|(a, b)| a.to_bits() == b.to_bits()),
-                "{kernel:?}"
-            );
-            assert!(
-                p1.iter().zip(v1).all(|(a, b)| a.to_bits() == b.to_bits()),
-                "{kernel:?}"
-            );
-        }
-        let mut hp = crate::cull::buffer::hiz::HizBuffer::default();
-        let mut hv = crate::cull::buffer::hiz::HizBuffer::default();
-        hp.reset(w, h, r);
-        hv.reset(w, h, r);
-        hp.draw(&tris, Kernel::Portable);
-        hv.draw(&tris, Kernel::Avx2);
-        assert!(
-            hp.pixels()
-                .iter()
-                .zip(hv.pixels())
-                .all(|(a, b)| a.to_bits() == b.to_bits())
+        same_bits_in_every_kernel(
+            (w, h, r),
+            &kernels,
+            |b| masked::draw_portable(b, &tris),
+            |b, k| b.draw(&tris, k),
+            |b, k| b.draw(&tris, k),
         );
     }
 }
@@ -848,38 +859,12 @@ fn polygon_rasterizers_leave_the_same_bits_in_every_kernel() {
         assert!(polys.iter().any(|p| p.vertices().len() <= 4));
         assert!(polys.iter().any(|p| p.vertices().len() > 4));
         let r = [0.0, 0.5][seed as usize % 2];
-        let mut p = MaskedBuffer::default();
-        p.reset(w, h, r);
-        masked::draw_polys_portable(&mut p, &polys);
-        let (pm, p0, p1) = p.state();
-        assert!(pm.iter().any(|&m| m != 0) && p0.iter().any(|z| z.is_finite()));
-        for &kernel in &kernels {
-            let mut v = MaskedBuffer::default();
-            v.reset(w, h, r);
-            v.draw_polygons(&polys, kernel);
-            let (vm, v0, v1) = v.state();
-            assert_eq!(pm, vm, "{kernel:?}");
-            assert!(
-                p0.iter().zip(v0).all(|(a, b)| a.to_bits() == b.to_bits()),
-                "{kernel:?}"
-            );
-            assert!(
-                p1.iter().zip(v1).all(|(a, b)| a.to_bits() == b.to_bits()),
-                "{kernel:?}"
-            );
-        }
-        let mut hp = crate::cull::buffer::hiz::HizBuffer::default();
-        let mut hv = crate::cull::buffer::hiz::HizBuffer::default();
-        hp.reset(w, h, r);
-        hv.reset(w, h, r);
-        hp.draw_polygons(&polys, Kernel::Portable);
-        hv.draw_polygons(&polys, Kernel::Avx2);
-        assert!(hp.pixels().iter().any(|z| z.is_finite()));
-        assert!(
-            hp.pixels()
-                .iter()
-                .zip(hv.pixels())
-                .all(|(a, b)| a.to_bits() == b.to_bits())
+        same_bits_in_every_kernel(
+            (w, h, r),
+            &kernels,
+            |b| masked::draw_polys_portable(b, &polys),
+            |b, k| b.draw_polygons(&polys, k),
+            |b, k| b.draw_polygons(&polys, k),
         );
     }
 }
