@@ -628,6 +628,23 @@ fn masked_merge_keeps_both_layers_as_bounds() {
     assert!(!b.hidden(0, 0, 7, 3, 0.31));
 }
 
+/// The vector kernels this processor has for the rasterizer tests of `what`: AVX2,
+/// and AVX-512 where present; `None` without AVX2. Each missing one is reported by
+/// `simd_test_skipped` (a failure under `OBSCURA_REQUIRE_SIMD`).
+fn vector_kernels(what: &str) -> Option<Vec<Kernel>> {
+    if !Avx2::is_available() {
+        crate::cpu::simd_test_skipped("AVX2", what);
+        return None;
+    }
+    let mut kernels = vec![Kernel::Avx2];
+    if Avx512::is_available() {
+        kernels.push(Kernel::Avx512);
+    } else {
+        crate::cpu::simd_test_skipped("AVX-512", what);
+    }
+    Some(kernels)
+}
+
 /// Draws the same occluders into a `w x h` buffer of sample side `r` with the portable
 /// masked kernel and each vector kernel of `kernels`, and into two hierarchical-z
 /// buffers (portable and AVX2): asserts that something was drawn and that every
@@ -666,16 +683,9 @@ fn same_bits_in_every_kernel(
 
 #[test]
 fn vector_and_portable_rasterizers_leave_the_same_bits() {
-    if !Avx2::is_available() {
-        crate::cpu::simd_test_skipped("AVX2", "occlusion buffer rasterizers");
+    let Some(kernels) = vector_kernels("occlusion buffer rasterizers") else {
         return;
-    }
-    let mut kernels = vec![Kernel::Avx2];
-    if Avx512::is_available() {
-        kernels.push(Kernel::Avx512);
-    } else {
-        crate::cpu::simd_test_skipped("AVX-512", "masked buffer rasterizer");
-    }
+    };
     let (w, h) = (203u32, 117u32);
     for seed in 0..4 {
         let tris = random_tris(300, seed, f64::from(w), f64::from(h));
@@ -843,16 +853,9 @@ fn random_polys(count: usize, seed: u64, w: f64, h: f64) -> Vec<Poly> {
 
 #[test]
 fn polygon_rasterizers_leave_the_same_bits_in_every_kernel() {
-    if !Avx2::is_available() {
-        crate::cpu::simd_test_skipped("AVX2", "occlusion buffer polygon rasterizers");
+    let Some(kernels) = vector_kernels("occlusion buffer polygon rasterizers") else {
         return;
-    }
-    let mut kernels = vec![Kernel::Avx2];
-    if Avx512::is_available() {
-        kernels.push(Kernel::Avx512);
-    } else {
-        crate::cpu::simd_test_skipped("AVX-512", "masked buffer polygon rasterizer");
-    }
+    };
     let (w, h) = (203u32, 117u32);
     for seed in 0..4 {
         let polys = random_polys(300, seed + 100, f64::from(w), f64::from(h));
